@@ -1,0 +1,1 @@
+"""suvtwin vehicle models: MJCF, parameter files and the builder (vehicle, road) → MjModel."""

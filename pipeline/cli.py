@@ -1,0 +1,286 @@
+"""The ``suvtwin`` command line: parse, validate, call the library, write files.
+
+Usual call: ``suvtwin road --class C --length 300 --seed 7 --out road.parquet --plot road.png``.
+
+No maths lives here. Bad input raises :class:`pipeline.errors.InputError`
+somewhere below; :func:`main` prints its one-line message to stderr and returns 2,
+having written nothing.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import tomllib
+import warnings
+from enum import StrEnum
+from pathlib import Path
+from typing import Annotated
+
+import typer
+import yaml
+
+from pipeline.errors import InputError
+from pipeline.iso8608 import CLASSES, class_bounds, level_cycle_to_omega
+from pipeline.road_spec import (
+    MAX_SPACING_M,
+    MIN_RECOMMENDED_LENGTH_M,
+    RoadSpec,
+    SegmentSpec,
+    parse_road_spec,
+)
+
+__all__ = ["app", "main"]
+
+app = typer.Typer(
+    name="suvtwin",
+    help=(
+        "suvtwin: open ground truth for vehicle state estimation. A MuJoCo SUV on "
+        "ISO 8608 roads, quarter-car identification and tire-pressure estimators. "
+        "Units: SI, except km/h and kPa where an option says so."
+    ),
+    add_completion=False,
+    no_args_is_help=True,
+    pretty_exceptions_enable=False,
+    context_settings={"help_option_names": ["-h", "--help"]},
+)
+
+
+class Method(StrEnum):
+    shape_filter = "shape-filter"
+    superposition = "superposition"
+
+
+class Tracks(StrEnum):
+    independent = "independent"
+    identical = "identical"
+    correlated = "correlated"
+
+
+def _warn(message: str) -> None:
+    typer.echo(f"suvtwin: warning: {message}", err=True)
+
+
+def _check_out(path: Path, option: str, suffixes: tuple[str, ...]) -> None:
+    if path.suffix.lower() not in suffixes:
+        raise InputError(f"{option} must end in {' or '.join(suffixes)}, got {str(path)!r}")
+    if not path.parent.is_dir():
+        raise InputError(f"{option}: folder {str(path.parent)!r} does not exist")
+
+
+def _load_mapping(path: Path, option: str) -> object:
+    if not path.is_file():
+        raise InputError(f"{option}: file {str(path)!r} does not exist")
+    text = path.read_text()
+    try:
+        if path.suffix.lower() == ".toml":
+            return tomllib.loads(text)
+        if path.suffix.lower() == ".json":
+            return json.loads(text)
+        if path.suffix.lower() in (".yaml", ".yml"):
+            return yaml.safe_load(text)
+    except (tomllib.TOMLDecodeError, json.JSONDecodeError, yaml.YAMLError) as error:
+        raise InputError(f"{option}: {str(path)!r} is malformed: {error}".replace("\n", " ")) from None
+    raise InputError(f"{option}: file must be .yaml, .yml, .toml or .json, got {str(path)!r}")
+
+
+@app.command("road")
+def road_command(
+    out: Annotated[Path, typer.Option("--out", help="Output Parquet file (x_m, z_left_m, z_right_m in m).")],
+    road_class: Annotated[
+        str | None,
+        typer.Option(
+            "--class", help="ISO 8608 class A–H; its geometric-mean level is used unless --gd-n0 is given."
+        ),
+    ] = None,
+    length: Annotated[
+        float, typer.Option(help="Road length, m (> 0; ≥ 100 m to hold 0.01 cycle/m).")
+    ] = 300.0,
+    spacing: Annotated[
+        float,
+        typer.Option(help=f"Grid spacing along x, m (0 < spacing ≤ {MAX_SPACING_M} to resolve 10 cycles/m)."),
+    ] = 0.02,
+    seed: Annotated[int, typer.Option(help="Seed of the random generator (≥ 0); same seed, same bytes.")] = 0,
+    gd_n0: Annotated[
+        float | None,
+        typer.Option(
+            "--gd-n0",
+            help="Roughness level Gd(n0), m³ at n0 = 0.1 cycle/m (0 < Gd < 1; class C spans 128e-6–512e-6).",
+        ),
+    ] = None,
+    waviness: Annotated[
+        float, typer.Option(help="PSD exponent w (1–3.5; ISO classes use 2; superposition only if ≠ 2).")
+    ] = 2.0,
+    method: Annotated[
+        Method, typer.Option(help="Generator: paper 000's shape filter or sinusoid superposition.")
+    ] = (Method.superposition),
+    tracks: Annotated[
+        Tracks, typer.Option(help="Left/right wheel tracks: independent, identical or correlated.")
+    ] = (Tracks.independent),
+    track_correlation: Annotated[
+        float, typer.Option(help="Left/right correlation coefficient for --tracks correlated (0–1).")
+    ] = 0.5,
+    spec: Annotated[
+        Path | None,
+        typer.Option(
+            help="Road description file (.yaml/.toml/.json: segments, obstacles, …); "
+            "replaces --class/--gd-n0/--length/--waviness/--method/--tracks/--spacing."
+        ),
+    ] = None,
+    plot: Annotated[
+        Path | None, typer.Option(help="Also draw the profile and its PSD against the ISO bands (PNG).")
+    ] = None,
+) -> None:
+    """Generate an ISO 8608 random road on two wheel tracks and write it to Parquet."""
+    from pipeline.roads import generate_road, write_road
+
+    _check_out(out, "--out", (".parquet",))
+    if plot is not None:
+        _check_out(plot, "--plot", (".png",))
+    if seed < 0:
+        raise InputError(f"--seed must be ≥ 0, got {seed}")
+    if spec is not None:
+        road_spec = parse_road_spec(_load_mapping(spec, "--spec"))
+    else:
+        road_spec = _spec_from_options(
+            road_class, length, spacing, gd_n0, waviness, method.value, tracks.value, track_correlation
+        )
+    if road_spec.length_m < MIN_RECOMMENDED_LENGTH_M:
+        _warn(
+            f"road length {road_spec.length_m:g} m < {MIN_RECOMMENDED_LENGTH_M:g} m cannot hold the "
+            "0.01 cycle/m end of the ISO band; its PSD and class are unreliable"
+        )
+    road = generate_road(road_spec, seed=seed)
+    if plot is not None:
+        from pipeline.road_plot import plot_road
+
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            plot_road(road, plot)
+        for item in caught:
+            _warn(str(item.message))
+    write_road(road, out)
+    typer.echo(f"wrote {out} ({road.x.size} samples, {road.length_m:g} m)" + (f" and {plot}" if plot else ""))
+
+
+def _spec_from_options(
+    road_class: str | None,
+    length: float,
+    spacing: float,
+    gd_n0: float | None,
+    waviness: float,
+    method: str,
+    tracks: str,
+    track_correlation: float,
+) -> RoadSpec:
+    if road_class is None and gd_n0 is None:
+        raise InputError("give --class (A–H) or --gd-n0 (m³ at 0.1 cycle/m), or --spec FILE")
+    if road_class is not None and road_class.strip().upper() not in CLASSES:
+        raise InputError(f"--class must be one of A–H, got {road_class!r}")
+    if not length > 0.0:
+        raise InputError(f"--length must be > 0 m, got {length:g}")
+    if not spacing > 0.0:
+        raise InputError(f"--spacing must be > 0 m, got {spacing:g}")
+    if spacing > MAX_SPACING_M:
+        raise InputError(f"--spacing must be ≤ {MAX_SPACING_M} m to resolve 10 cycles/m, got {spacing:g}")
+    if spacing > length / 16:
+        raise InputError(f"--spacing {spacing:g} m is too coarse for a {length:g} m road (need ≥ 16 samples)")
+    if gd_n0 is not None and not 0.0 < gd_n0 < 1.0:
+        raise InputError(f"--gd-n0 must be in (0, 1) m³, got {gd_n0:g}")
+    if gd_n0 is not None and road_class is not None:
+        lower, upper = class_bounds(road_class)
+        if not lower <= gd_n0 <= upper:
+            raise InputError(
+                f"--gd-n0 {gd_n0:.3g} m³ lies outside class {road_class.upper()} "
+                f"[{lower:.3g}, {upper:.3g}] m³; drop --class or pick a level inside it"
+            )
+    if not 1.0 <= waviness <= 3.5:
+        raise InputError(f"--waviness must be in [1, 3.5], got {waviness:g}")
+    if waviness != 2.0 and method == "shape-filter":
+        raise InputError(
+            "--waviness other than 2 needs --method superposition (the shape filter makes w = 2)"
+        )
+    if not 0.0 <= track_correlation <= 1.0:
+        raise InputError(f"--track-correlation must be in [0, 1], got {track_correlation:g}")
+    return RoadSpec(
+        segments=[
+            SegmentSpec(
+                length_m=length,
+                road_class=None if road_class is None else road_class.upper(),
+                gd_n0=gd_n0,
+                waviness=waviness,
+            )
+        ],
+        spacing_m=spacing,
+        method=method,
+        tracks=tracks,
+        track_correlation=track_correlation,
+    )
+
+
+@app.command("classify")
+def classify_command(
+    road_file: Annotated[Path, typer.Argument(help="Parquet file with x_m, z_left_m, z_right_m (m).")],
+    band_low: Annotated[float, typer.Option(help="Lower end of the fit band, cycles/m (> 0).")] = 0.05,
+    band_high: Annotated[float, typer.Option(help="Upper end of the fit band, cycles/m (> band-low).")] = 5.0,
+    as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of a table.")] = False,
+) -> None:
+    """Fit ISO 8608 level (w = 2 and w free) and class to each track of a road file."""
+    from pipeline.roads import read_road
+    from pipeline.roughness import classify_profile
+
+    if not 0.0 < band_low < band_high:
+        raise InputError(
+            f"fit band must satisfy 0 < --band-low < --band-high, got {band_low:g}, {band_high:g}"
+        )
+    road = read_road(road_file)
+    results = {}
+    for i, track in enumerate(("left", "right")):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            fit = classify_profile(road.z[i], road.spacing_m, band=(band_low, band_high))
+        for item in caught:
+            _warn(f"{track} track: {item.message}")
+        results[track] = {
+            "gd_n0_m3": fit.gd_n0,
+            "gd_omega0_m3": level_cycle_to_omega(fit.gd_n0),
+            "class": fit.road_class,
+            "gd_n0_free_m3": fit.gd_n0_free,
+            "waviness": fit.waviness,
+            "band_cycles_per_m": list(fit.band),
+        }
+    if as_json:
+        typer.echo(json.dumps(results, indent=2))
+        return
+    typer.echo(f"{road_file}: {road.x.size} samples, {road.length_m:g} m at {road.spacing_m:g} m")
+    low, high = results["left"]["band_cycles_per_m"]
+    typer.echo(f"fit band {low:.3g}–{high:.3g} cycles/m; Gd(n0) in m³ at n0 = 0.1 cycle/m")
+    typer.echo(f"{'track':<6} {'Gd(n0), w=2':>12} {'class':>5} {'Gd(n0), free w':>15} {'w':>6}")
+    for track, r in results.items():
+        typer.echo(
+            f"{track:<6} {r['gd_n0_m3']:>12.4g} {r['class']:>5} "
+            f"{r['gd_n0_free_m3']:>15.4g} {r['waviness']:>6.3f}"
+        )
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the CLI with `argv` (default: ``sys.argv[1:]``); return the exit status.
+
+    0 on success; 2 on bad input (one message on stderr, no output written) or a
+    usage error (typer's message); 1 if interrupted.
+    """
+    try:
+        app(args=argv, prog_name="suvtwin")
+    except InputError as error:
+        typer.echo(f"suvtwin: error: {error}", err=True)
+        return 2
+    except SystemExit as done:
+        if done.code is None or isinstance(done.code, int):
+            return done.code or 0
+        typer.echo(str(done.code), err=True)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,433 @@
+r"""ISO 8608 random road profiles on two wheel tracks, with segments and obstacles.
+
+Usual call: ``road = generate_road(RoadSpec(segments=[SegmentSpec(length_m=300, road_class="C")]), seed=7)``.
+
+Two generators, both seeded by a :class:`numpy.random.Generator`, both
+vectorized (no per-sample Python loop):
+
+``shape-filter``
+    The first-order shape filter of Brancati & Tufano 2022, eq. 5–6, written
+    over distance x (α = 0.127 rad/m):
+    :math:`dz/dx = -\alpha z + \xi(x)`, whose one-sided angular PSD is
+    :math:`G(\Omega) = q / (\alpha^2 + \Omega^2)`. It is discretized exactly as
+    an AR(1) process (:func:`scipy.signal.lfilter`). The paper sets the
+    variance to σ² = 4·Gd(Ω0), which puts the PSD at Ω0 = 1 rad/m at
+    :math:`2\alpha\sigma^2/(\pi(1+\alpha^2)) \approx 0.32\,G_d(\Omega_0)`, a road
+    three times too smooth; here `q` is calibrated so that the PSD at
+    Ω0 = 1 rad/m *is* the ISO level (:func:`shape_filter_intensity`).
+    Above α/2π ≈ 0.02 cycle/m the PSD follows the ISO slope w = 2; below it
+    flattens (that is the filter's purpose).
+
+``superposition``
+    Sinusoid superposition, Lin et al. 2021, eq. 31:
+    :math:`z(x) = \sum_i A_i \sin(2\pi n_i x - \psi_i)` with random phases
+    over ``n_min … n_max`` (default 0.01–10 cycles/m), evaluated by one inverse
+    real FFT on a grid of at least ``8/n_min`` metres so the profile never
+    repeats within a road. :math:`A_i^2/2` is the ISO PSD integrated over the
+    line's bin, so the profile variance equals the integral of the target PSD
+    over the band exactly (eq. 31's :math:`A_i = \sqrt{2\Phi(n_i)\Delta n}`
+    overstates it by ~30 % at the 0.01 cycle/m edge, where the PSD is steep).
+    Any waviness w is possible.
+
+Segments are generated independently and joined by a power-complementary
+(cos/sin) cross-fade of ``transition_m``, so the profile has no step at a
+class change and its variance does not dip. Left/right tracks are independent,
+identical, or correlated with coefficient ρ at every wavelength
+(:math:`z_r = \rho z_l + \sqrt{1-\rho^2} z_2`, which keeps each track's PSD).
+
+References
+----------
+.. [1] R. Brancati, F. Tufano, "Indirect estimation of tire pressure on several
+   road pavements via Interacting Multiple Model approach", Sensors, 2022.
+.. [2] Lin et al., "Vertical vehicle dynamics estimated inputs", 2021.
+.. [3] ISO 8608:2016, "Mechanical vibration — Road surface profiles".
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from importlib import metadata
+from pathlib import Path
+
+import numpy as np
+import numpy.typing as npt
+import pyarrow as pa
+import pyarrow.parquet as pq
+import scipy.fft
+import scipy.signal
+
+from pipeline.errors import InputError
+from pipeline.files import atomic_write
+from pipeline.iso8608 import N0_CYCLES_PER_M, OMEGA0_RAD_PER_M
+from pipeline.road_spec import ObstacleSpec, RoadSpec
+
+__all__ = [
+    "SHAPE_FILTER_ALPHA",
+    "Road",
+    "add_obstacles",
+    "generate_road",
+    "obstacle_profile",
+    "read_road",
+    "shape_filter_intensity",
+    "shape_filter_profile",
+    "superposition_profile",
+    "write_road",
+]
+
+SHAPE_FILTER_ALPHA = 0.127
+"""Shape-filter low-frequency cut-off α, rad/m (Brancati & Tufano 2022, §2)."""
+
+_METADATA_KEY = b"suvtwin.road"
+_COLUMNS = ("x_m", "z_left_m", "z_right_m")
+
+
+def shape_filter_intensity(gd_n0: float, *, alpha: float = SHAPE_FILTER_ALPHA) -> float:
+    r"""Intensity `q` of the shape filter so its PSD at Ω0 = 1 rad/m is the ISO level, m.
+
+    The filter's one-sided angular PSD is :math:`G(\Omega) = q/(\alpha^2+\Omega^2)`
+    (Brancati & Tufano 2022, eq. 5 with :math:`q = 2\alpha\sigma^2/\pi`).
+    Setting :math:`G(\Omega_0)` to the ISO angular level
+    :math:`G_d(\Omega_0) = G_d(n_0)(2\pi n_0/\Omega_0)^2/(2\pi)` (w = 2) gives
+    :math:`q = G_d(\Omega_0)(\alpha^2 + \Omega_0^2)`.
+    """
+    gd_omega0 = gd_n0 * (2.0 * np.pi * N0_CYCLES_PER_M / OMEGA0_RAD_PER_M) ** 2 / (2.0 * np.pi)
+    return gd_omega0 * (alpha**2 + OMEGA0_RAD_PER_M**2)
+
+
+def shape_filter_profile(
+    n_samples: int,
+    spacing_m: float,
+    *,
+    gd_n0: float,
+    rng: np.random.Generator,
+    n_tracks: int = 1,
+    alpha: float = SHAPE_FILTER_ALPHA,
+) -> np.ndarray:
+    r"""Road profile from the first-order shape filter, m.
+
+    Exact discretization of :math:`dz/dx = -\alpha z + \xi` (Brancati & Tufano
+    2022, eq. 6 over distance): :math:`z_{k+1} = \phi z_k + s\,e_k`,
+    :math:`\phi = e^{-\alpha\Delta x}`,
+    :math:`s^2 = \sigma_z^2(1-\phi^2)`, stationary variance
+    :math:`\sigma_z^2 = \pi q/(2\alpha)`, started in the stationary state.
+
+    Parameters
+    ----------
+    n_samples : int
+        Number of samples along x.
+    spacing_m : float
+        Grid spacing Δx, m.
+    gd_n0 : float
+        ISO level Gd(n0), m³ at n0 = 0.1 cycle/m (:func:`shape_filter_intensity`).
+    rng : numpy.random.Generator
+        Source of the white noise.
+    n_tracks : int, optional
+        Number of independent profiles (default 1).
+    alpha : float, optional
+        Low-frequency cut-off α, rad/m (default 0.127).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_tracks, n_samples)
+        Elevation, m.
+    """
+    q = shape_filter_intensity(gd_n0, alpha=alpha)
+    variance = np.pi * q / (2.0 * alpha)
+    phi = np.exp(-alpha * spacing_m)
+    noise = rng.standard_normal((n_tracks, n_samples))
+    drive = noise * np.sqrt(variance * (1.0 - phi**2))
+    drive[:, 0] = noise[:, 0] * np.sqrt(variance)  # stationary start z_0 ~ N(0, σ_z²)
+    return scipy.signal.lfilter([1.0], [1.0, -phi], drive, axis=-1)
+
+
+def superposition_profile(
+    n_samples: int,
+    spacing_m: float,
+    *,
+    gd_n0: float,
+    rng: np.random.Generator,
+    waviness: float = 2.0,
+    n_min: float = 0.01,
+    n_max: float = 10.0,
+    n_tracks: int = 1,
+) -> np.ndarray:
+    r"""Road profile as a sum of sinusoids with random phases, m.
+
+    :math:`z(x) = \sum_i A_i \sin(2\pi n_i x - \psi_i)`, :math:`\psi_i \sim U[0, 2\pi)`
+    (Lin et al. 2021, eq. 31), on the lines :math:`n_i = i\,\Delta n` of an FFT
+    grid inside ``[n_min, n_max]``, with
+    :math:`A_i^2/2 = \int_{\text{bin } i} G_d(n)\,dn` (ISO 8608 PSD, bins clipped
+    to the band). Evaluated by one inverse real FFT.
+
+    Parameters
+    ----------
+    n_samples : int
+        Number of samples along x.
+    spacing_m : float
+        Grid spacing Δx, m; ``n_max`` must not exceed 1/(2Δx).
+    gd_n0 : float
+        ISO level Gd(n0), m³ at n0 = 0.1 cycle/m.
+    rng : numpy.random.Generator
+        Source of the phases.
+    waviness : float, optional
+        PSD exponent w (default 2).
+    n_min, n_max : float, optional
+        Generated band, cycles/m (default 0.01–10).
+    n_tracks : int, optional
+        Number of independent profiles (default 1).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_tracks, n_samples)
+        Elevation, m.
+    """
+    n_fft = scipy.fft.next_fast_len(max(n_samples, int(np.ceil(8.0 / (n_min * spacing_m)))), real=True)
+    dn = 1.0 / (n_fft * spacing_m)
+    k = np.arange(n_fft // 2 + 1)
+    lines = k * dn
+    lower = np.clip(lines - dn / 2.0, n_min, n_max)
+    upper = np.clip(lines + dn / 2.0, n_min, n_max)
+    inside = (upper > lower) & (k > 0) & (k < n_fft / 2.0)
+    bin_power = np.zeros_like(lines)
+    bin_power[inside] = _psd_integral(lower[inside], upper[inside], gd_n0=gd_n0, waviness=waviness)
+    amplitude = np.sqrt(2.0 * bin_power)
+    phase = rng.uniform(0.0, 2.0 * np.pi, size=(n_tracks, lines.size))
+    # irfft(X)[j] = (2/N) Re sum_k X_k exp(i 2π k j / N); X_k = (N/2) A_k exp(-i(ψ_k + π/2))
+    # gives A_k sin(2π n_k x_j - ψ_k).
+    spectrum = (n_fft / 2.0) * amplitude * np.exp(-1j * (phase + np.pi / 2.0))
+    return scipy.fft.irfft(spectrum, n=n_fft, axis=-1)[:, :n_samples]
+
+
+def _psd_integral(lower: np.ndarray, upper: np.ndarray, *, gd_n0: float, waviness: float) -> np.ndarray:
+    """∫ Gd(n) dn from `lower` to `upper` (cycles/m) of the ISO PSD, m²."""
+    scale = gd_n0 * N0_CYCLES_PER_M**waviness
+    if np.isclose(waviness, 1.0):
+        return scale * np.log(upper / lower)
+    e = 1.0 - waviness
+    return scale * (upper**e - lower**e) / e
+
+
+def obstacle_profile(x: npt.ArrayLike, obstacle: ObstacleSpec) -> np.ndarray:
+    """Elevation added by one obstacle along `x` (m), m.
+
+    ``sine_bump``: :math:`h_0 \\sin(\\pi (x - x_0)/D)` on :math:`[x_0, x_0 + D]`
+    (Lin et al. 2021, eq. 23 with :math:`w_f t = \\pi v t / D = \\pi s / D`);
+    ``cleat``: `height_m` on :math:`[x_0, x_0 + D)`; ``pothole``: `-height_m`
+    on :math:`[x_0, x_0 + D)`.
+    """
+    x = np.asarray(x, dtype=float)
+    s = x - obstacle.position_m
+    if obstacle.kind == "sine_bump":
+        on = (s >= 0.0) & (s <= obstacle.length_m)
+        return np.where(on, obstacle.height_m * np.sin(np.pi * s / obstacle.length_m), 0.0)
+    on = (s >= 0.0) & (s < obstacle.length_m)
+    sign = 1.0 if obstacle.kind == "cleat" else -1.0
+    return np.where(on, sign * obstacle.height_m, 0.0)
+
+
+def add_obstacles(x: np.ndarray, z: np.ndarray, obstacles: list[ObstacleSpec]) -> np.ndarray:
+    """Return `z` (shape (2, n): left, right) with every obstacle added on its track(s), m."""
+    z = z.copy()
+    for obstacle in obstacles:
+        bump = obstacle_profile(x, obstacle)
+        if obstacle.track in ("left", "both"):
+            z[0] += bump
+        if obstacle.track in ("right", "both"):
+            z[1] += bump
+    return z
+
+
+@dataclass(frozen=True)
+class Road:
+    """A road on a uniform grid: two wheel tracks and how they were made.
+
+    Attributes
+    ----------
+    x : numpy.ndarray, shape (n,)
+        Distance along the road, m, uniformly spaced, increasing.
+    z : numpy.ndarray, shape (2, n)
+        Elevation of the left (row 0) and right (row 1) wheel track, m.
+    spec : RoadSpec or None
+        Description the road was generated from (None for a road read from a
+        file that does not carry one, e.g. a measured profile).
+    seed : int or None
+        Seed of the generator (None if not generated here).
+    """
+
+    x: np.ndarray
+    z: np.ndarray
+    spec: RoadSpec | None = None
+    seed: int | None = None
+
+    def __post_init__(self) -> None:
+        x = np.array(self.x, dtype=float)
+        z = np.array(self.z, dtype=float)
+        if x.ndim != 1 or z.shape != (2, x.size):
+            raise InputError(f"road arrays: x must be (n,) and z (2, n), got {x.shape} and {z.shape}")
+        x.setflags(write=False)
+        z.setflags(write=False)
+        object.__setattr__(self, "x", x)
+        object.__setattr__(self, "z", z)
+
+    @property
+    def spacing_m(self) -> float:
+        """Grid spacing, m."""
+        return float(self.x[1] - self.x[0])
+
+    @property
+    def length_m(self) -> float:
+        """Distance from first to last sample, m."""
+        return float(self.x[-1] - self.x[0])
+
+    def height(self, x: npt.ArrayLike, track: int) -> np.ndarray:
+        """Elevation of track `track` (0 left, 1 right) at distances `x` (m), m.
+
+        Linear interpolation; held constant beyond the ends.
+        """
+        return np.interp(x, self.x, self.z[track])
+
+
+def generate_road(spec: RoadSpec, *, seed: int) -> Road:
+    """Generate the road described by `spec`, reproducibly from `seed`.
+
+    Segments are drawn in order, each track after the other, from one
+    ``numpy.random.default_rng(seed)``: the same spec and seed give the same
+    road, bit for bit.
+    """
+    rng = np.random.default_rng(seed)
+    n_samples = int(np.floor(spec.length_m / spec.spacing_m + 1e-9)) + 1
+    x = np.arange(n_samples) * spec.spacing_m
+    bounds = np.cumsum([0.0] + [seg.length_m for seg in spec.segments])
+    half_fade = spec.transition_m / 2.0
+    z = np.zeros((2, n_samples))
+    for i in range(len(spec.segments)):
+        start = bounds[i] - (half_fade if i > 0 else 0.0)
+        end = bounds[i + 1] + (half_fade if i < len(spec.segments) - 1 else 0.0)
+        first = max(int(np.floor(start / spec.spacing_m)), 0)
+        last = min(int(np.ceil(end / spec.spacing_m)), n_samples - 1)
+        piece = _segment_tracks(spec, segment_index=i, n_samples=last - first + 1, rng=rng)
+        weight = _fade_weight(x[first : last + 1], bounds, i, half_fade)
+        z[:, first : last + 1] += weight * piece
+    z = add_obstacles(x, z, spec.obstacles)
+    return Road(x=x, z=z, spec=spec, seed=seed)
+
+
+def _segment_tracks(
+    spec: RoadSpec, *, segment_index: int, n_samples: int, rng: np.random.Generator
+) -> np.ndarray:
+    """Left and right profile of one segment, shape (2, n_samples), m."""
+    segment = spec.segments[segment_index]
+    n_draw = 1 if spec.tracks == "identical" else 2
+    if spec.method == "shape-filter":
+        draws = shape_filter_profile(n_samples, spec.spacing_m, gd_n0=segment.level, rng=rng, n_tracks=n_draw)
+    else:
+        draws = superposition_profile(
+            n_samples,
+            spec.spacing_m,
+            gd_n0=segment.level,
+            waviness=segment.waviness,
+            n_min=spec.n_min,
+            n_max=spec.n_max,
+            rng=rng,
+            n_tracks=n_draw,
+        )
+    if spec.tracks == "identical":
+        return np.vstack([draws[0], draws[0]])
+    if spec.tracks == "correlated":
+        rho = spec.track_correlation
+        return np.vstack([draws[0], rho * draws[0] + np.sqrt(1.0 - rho**2) * draws[1]])
+    return draws
+
+
+def _fade_weight(x: np.ndarray, bounds: np.ndarray, i: int, half_fade: float) -> np.ndarray:
+    """Power-complementary weight of segment `i` at `x`: 1 inside, cos/sin ramps at joins."""
+    weight = np.ones_like(x)
+    if half_fade == 0.0:
+        inside = (x >= bounds[i]) & ((x < bounds[i + 1]) | (i == bounds.size - 2))
+        return inside.astype(float)
+    if i > 0:  # ramp up across the join at bounds[i]
+        s = np.clip((x - (bounds[i] - half_fade)) / (2.0 * half_fade), 0.0, 1.0)
+        weight *= np.sin(0.5 * np.pi * s)
+    if i < bounds.size - 2:  # ramp down across the join at bounds[i + 1]
+        s = np.clip((x - (bounds[i + 1] - half_fade)) / (2.0 * half_fade), 0.0, 1.0)
+        weight *= np.cos(0.5 * np.pi * s)
+    return weight
+
+
+def _versions() -> dict[str, str]:
+    names = ("suvtwin", "numpy", "scipy", "pyarrow")
+    out = {}
+    for name in names:
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            out[name] = "unknown"
+    return out
+
+
+def write_road(road: Road, path: str | os.PathLike) -> None:
+    """Write `road` to a Parquet file: columns ``x_m``, ``z_left_m``, ``z_right_m``.
+
+    The spec, seed and package versions go into the file's metadata under
+    ``suvtwin.road`` (JSON). The file is written to a temporary name and renamed,
+    so a failure never leaves a partial file; the same road gives the same bytes.
+    """
+    table = pa.table({"x_m": road.x, "z_left_m": road.z[0], "z_right_m": road.z[1]})
+    info = {
+        "spec": None if road.spec is None else road.spec.model_dump(mode="json"),
+        "seed": road.seed,
+        "versions": _versions(),
+    }
+    table = table.replace_schema_metadata({_METADATA_KEY: json.dumps(info, sort_keys=True).encode()})
+    atomic_write(path, lambda tmp: pq.write_table(table, tmp, compression="zstd"))
+
+
+def read_road(path: str | os.PathLike) -> Road:
+    """Read a road from a Parquet file with columns ``x_m``, ``z_left_m``, ``z_right_m``.
+
+    Any file with those columns is accepted (a measured profile, too): x in m,
+    strictly increasing and uniformly spaced, elevations in m, no NaN.
+
+    Raises
+    ------
+    InputError
+        If the file is missing, not Parquet, lacks a column, or holds bad values.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"road file {str(path)!r} does not exist")
+    try:
+        table = pq.read_table(path)
+    except (pa.ArrowException, OSError) as error:
+        raise InputError(f"road file {str(path)!r} is not a readable Parquet file ({error})") from None
+    missing = [c for c in _COLUMNS if c not in table.column_names]
+    if missing:
+        raise InputError(
+            f"road file {str(path)!r} lacks column(s) {', '.join(missing)}; expected {', '.join(_COLUMNS)}"
+        )
+    try:
+        x, left, right = (table.column(c).to_numpy().astype(float) for c in _COLUMNS)
+    except (TypeError, ValueError, pa.ArrowException) as error:
+        raise InputError(f"road file {str(path)!r}: columns must be numeric ({error})") from None
+    if x.size < 16:
+        raise InputError(f"road file {str(path)!r}: needs at least 16 samples, got {x.size}")
+    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(left)) and np.all(np.isfinite(right))):
+        raise InputError(f"road file {str(path)!r}: x_m, z_left_m and z_right_m must be finite (no NaN)")
+    step = np.diff(x)
+    if np.any(step <= 0.0):
+        raise InputError(f"road file {str(path)!r}: x_m must be strictly increasing")
+    if np.ptp(step) > 1e-6 * np.mean(step) + 1e-12:
+        raise InputError(
+            f"road file {str(path)!r}: x_m must be uniformly spaced "
+            f"(steps from {step.min():.6g} to {step.max():.6g} m)"
+        )
+    spec, seed = None, None
+    raw = (table.schema.metadata or {}).get(_METADATA_KEY)
+    if raw is not None:
+        info = json.loads(raw)
+        if info.get("spec") is not None:
+            spec = RoadSpec.model_validate(info["spec"])
+        seed = info.get("seed")
+    return Road(x=x, z=np.vstack([left, right]), spec=spec, seed=seed)

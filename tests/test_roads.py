@@ -1,0 +1,242 @@
+"""Road generators against ISO 8608, the analytic shape-filter process, and a direct sine sum."""
+
+import numpy as np
+import pytest
+import scipy.fft
+import scipy.signal
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy import integrate
+
+from pipeline.iso8608 import CLASSES, class_bounds, class_level, displacement_psd
+from pipeline.road_spec import ObstacleSpec, RoadSpec, SegmentSpec
+from pipeline.roads import (
+    SHAPE_FILTER_ALPHA,
+    generate_road,
+    obstacle_profile,
+    read_road,
+    shape_filter_intensity,
+    shape_filter_profile,
+    superposition_profile,
+    write_road,
+)
+from pipeline.roughness import classify_profile, fit_iso, profile_psd
+
+METHODS = ("shape-filter", "superposition")
+N_SEEDS = 20
+
+
+def _road(road_class="C", length=300.0, method="superposition", **kwargs):
+    segment_keys = {"gd_n0", "waviness"}
+    seg = {k: kwargs.pop(k) for k in list(kwargs) if k in segment_keys}
+    return RoadSpec(
+        segments=[SegmentSpec(length_m=length, road_class=road_class, **seg)], method=method, **kwargs
+    )
+
+
+def _target_variance(spec: RoadSpec) -> float:
+    """Variance the generator is designed to produce, by quadrature of its target PSD (m^2)."""
+    seg = spec.segments[0]
+    if spec.method == "superposition":  # ISO PSD over the generated band
+        value, _ = integrate.quad(
+            lambda n: displacement_psd(n, gd_n0=seg.level, waviness=seg.waviness),
+            spec.n_min,
+            spec.n_max,
+            limit=400,
+        )
+        return value
+    # shape filter, eq. 5: G(Omega) = q / (alpha^2 + Omega^2) over Omega in [0, inf)
+    q = shape_filter_intensity(seg.level)
+    value, _ = integrate.quad(lambda w: q / (SHAPE_FILTER_ALPHA**2 + w**2), 0, np.inf)
+    return value
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("letter", CLASSES)
+def test_fitted_level_inside_class_and_std_matches_psd_integral(letter, method):
+    spec = _road(letter, 300.0, method, spacing_m=0.02)
+    lower, upper = class_bounds(letter)
+    inside, waviness, stds = 0, [], []
+    for seed in range(N_SEEDS):
+        road = generate_road(spec, seed=seed)
+        for track in (0, 1):
+            fit = classify_profile(road.z[track], road.spacing_m)
+            inside += lower <= fit.gd_n0 <= upper
+            waviness.append(fit.waviness)
+            stds.append(road.z[track].std())
+    # acceptance: >= 19 of 20 inside the class bounds (here counted over both tracks: 38 of 40)
+    assert inside >= 38
+    if method == "superposition":
+        assert np.all(np.abs(np.array(waviness) - 2.0) <= 0.25)
+        assert np.mean(waviness) == pytest.approx(2.0, abs=0.05)
+    # elevation std vs the integral of the target PSD: within 10 % on the mean over seeds
+    assert np.mean(stds) == pytest.approx(np.sqrt(_target_variance(spec)), rel=0.10)
+
+
+@pytest.mark.parametrize("waviness", [1.6, 2.5, 3.0])
+def test_superposition_reproduces_other_waviness(waviness):
+    spec = _road(None, 1000.0, gd_n0=3e-4, waviness=waviness)
+    fits = [classify_profile(generate_road(spec, seed=s).z[0], 0.02) for s in range(5)]
+    assert np.mean([f.waviness for f in fits]) == pytest.approx(waviness, abs=0.05)
+    assert np.mean([f.gd_n0_free for f in fits]) == pytest.approx(3e-4, rel=0.10)
+
+
+def test_superposition_equals_a_direct_sum_of_sines():
+    # Lin et al. 2021 eq. 31 summed term by term, with each A_i^2/2 from quadrature of the ISO
+    # PSD over the line's bin, against the generator's single inverse FFT.
+    spacing, n_samples, gd_n0, w, n_min, n_max = 0.05, 400, 2e-4, 2.3, 0.2, 5.0
+    profile = superposition_profile(
+        n_samples,
+        spacing,
+        gd_n0=gd_n0,
+        waviness=w,
+        n_min=n_min,
+        n_max=n_max,
+        rng=np.random.default_rng(5),
+    )[0]
+    # the generator's grid: at least 8/n_min m, a fast FFT length
+    n_fft = scipy.fft.next_fast_len(max(n_samples, int(np.ceil(8.0 / (n_min * spacing)))), real=True)
+    dn = 1.0 / (n_fft * spacing)
+    n_lines = n_fft // 2 + 1
+    phases = np.random.default_rng(5).uniform(0.0, 2.0 * np.pi, size=(1, n_lines))[0]
+    x = np.arange(n_samples) * spacing
+    expected = np.zeros(n_samples)
+    for k in range(1, n_lines):
+        lo, hi = max(k * dn - dn / 2, n_min), min(k * dn + dn / 2, n_max)
+        if hi <= lo or k >= n_fft / 2:
+            continue
+        power, _ = integrate.quad(lambda n: displacement_psd(n, gd_n0=gd_n0, waviness=w), lo, hi)
+        expected += np.sqrt(2 * power) * np.sin(2 * np.pi * k * dn * x - phases[k])
+    assert profile.size == n_samples
+    np.testing.assert_allclose(profile, expected, rtol=0, atol=1e-9 * np.abs(expected).max())
+
+
+def test_shape_filter_autocovariance_is_the_analytic_exponential():
+    # dz/dx = -alpha z + xi has autocovariance sigma^2 exp(-alpha |lag|), sigma^2 = pi q /(2 alpha)
+    spacing, gd_n0 = 0.05, class_level("D")
+    z = shape_filter_profile(400_000, spacing, gd_n0=gd_n0, rng=np.random.default_rng(2), n_tracks=4)
+    sigma2 = np.pi * shape_filter_intensity(gd_n0) / (2 * SHAPE_FILTER_ALPHA)
+    for lag_m in (0.0, 2.0, 5.0, 10.0):
+        k = int(round(lag_m / spacing))
+        cov = np.mean(z[:, : z.shape[1] - k] * z[:, k:])
+        # 20 000 m per track / correlation length 7.9 m: ~2.5 % standard error on 4 tracks
+        assert cov == pytest.approx(sigma2 * np.exp(-SHAPE_FILTER_ALPHA * lag_m), rel=0.08)
+
+
+def test_shape_filter_hits_the_iso_level_where_the_paper_variance_does_not():
+    # Calibrated: Welch PSD at Omega0 = 1 rad/m (n = 0.159 cycle/m) equals the ISO level.
+    gd_n0 = class_level("B")
+    z = shape_filter_profile(200_000, 0.02, gd_n0=gd_n0, rng=np.random.default_rng(8), n_tracks=8)
+    n, psd = profile_psd(z, 0.02, segment_m=200.0)
+    band = (n > 0.12) & (n < 0.21)
+    measured = np.mean(psd[:, band]) / np.mean(displacement_psd(n[band], gd_n0=gd_n0))
+    assert measured == pytest.approx(1.0, abs=0.08)
+    # Brancati & Tufano 2022, eq. 5 with sigma^2 = 4 Gd(Omega0) as the paper states gives
+    # G(Omega0) = 2 alpha 4 Gd / (pi (alpha^2 + 1)): a third of the class level.
+    paper_ratio = 2 * SHAPE_FILTER_ALPHA * 4 / (np.pi * (SHAPE_FILTER_ALPHA**2 + 1))
+    assert paper_ratio == pytest.approx(0.318, abs=0.002)
+    assert measured / paper_ratio > 2.9
+
+
+def test_same_seed_same_bytes_different_seed_different_road(tmp_path):
+    spec = _road("D", 200.0, "shape-filter", tracks="correlated", track_correlation=0.7)
+    write_road(generate_road(spec, seed=3), tmp_path / "a.parquet")
+    write_road(generate_road(spec, seed=3), tmp_path / "b.parquet")
+    write_road(generate_road(spec, seed=4), tmp_path / "c.parquet")
+    assert (tmp_path / "a.parquet").read_bytes() == (tmp_path / "b.parquet").read_bytes()
+    a, c = read_road(tmp_path / "a.parquet"), read_road(tmp_path / "c.parquet")
+    assert not np.allclose(a.z, c.z)
+    assert a.spec == spec and a.seed == 3
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_track_modes(method):
+    n = 100_000  # 2 km
+    for tracks, rho in (("independent", 0.0), ("identical", 1.0), ("correlated", 0.6)):
+        road = generate_road(_road("C", 2000.0, method, tracks=tracks, track_correlation=0.6), seed=1)
+        measured = np.corrcoef(road.z)[0, 1]
+        if tracks == "identical":
+            np.testing.assert_array_equal(road.z[0], road.z[1])
+        else:
+            # a 2 km road holds ~250 correlation lengths (shape filter): standard error ~0.06
+            assert measured == pytest.approx(rho, abs=0.15)
+        if tracks == "correlated":
+            f, coh = scipy.signal.coherence(road.z[0], road.z[1], fs=50.0, nperseg=4096)
+            band = (f > 0.1) & (f < 5)
+            assert np.mean(coh[band]) == pytest.approx(rho**2, abs=0.06)
+            assert road.z[1].std() == pytest.approx(road.z[0].std(), rel=0.2)
+        assert road.x.size == n + 1
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_class_switch_segments_a_to_d(method):
+    # Brancati & Tufano 2022 §5.4: the road switches from class A to class D.
+    spec = RoadSpec(
+        segments=[SegmentSpec(length_m=400, road_class="A"), SegmentSpec(length_m=400, road_class="D")],
+        method=method,
+        transition_m=2.0,
+    )
+    road = generate_road(spec, seed=9)
+    half = road.x.size // 2
+    first = classify_profile(road.z[0, : half - 100], 0.02)
+    second = classify_profile(road.z[0, half + 100 :], 0.02)
+    assert (first.road_class, second.road_class) == ("A", "D")
+    # no step at the join: the largest sample-to-sample change near the join is no bigger than
+    # the largest elsewhere on the rough segment
+    dz = np.abs(np.diff(road.z[0]))
+    join = slice(half - 100, half + 100)
+    assert dz[join].max() <= dz[half + 100 :].max()
+    assert road.z[0, half + 100 :].std() / road.z[0, : half - 100].std() == pytest.approx(8.0, rel=0.35)
+
+
+def test_obstacles_have_their_analytic_shape():
+    spec = RoadSpec(
+        segments=[SegmentSpec(length_m=100, gd_n0=1e-12)],  # practically flat
+        obstacles=[
+            ObstacleSpec(kind="sine_bump", position_m=10, length_m=2.0, height_m=0.1, track="left"),
+            ObstacleSpec(kind="cleat", position_m=30, length_m=0.5, height_m=0.02, track="right"),
+            ObstacleSpec(kind="pothole", position_m=50, length_m=1.0, height_m=0.05, track="both"),
+        ],
+    )
+    road = generate_road(spec, seed=0)
+    x, (left, right) = road.x, road.z
+    bump = (x >= 10) & (x <= 12)
+    # Lin et al. 2021 eq. 23: peak h0 at mid-length, area 2 h0 D / pi
+    assert left[np.argmin(np.abs(x - 11.0))] == pytest.approx(0.1, abs=1e-5)
+    assert np.trapezoid(left[bump], x[bump]) == pytest.approx(2 * 0.1 * 2.0 / np.pi, rel=1e-3)
+    assert np.abs(right[bump]).max() < 1e-5
+    cleat = (x >= 30) & (x < 30.5)
+    assert right[cleat] == pytest.approx(np.full(cleat.sum(), 0.02), abs=1e-5)
+    assert np.abs(left[cleat]).max() < 1e-5
+    hole = (x >= 50) & (x < 51)
+    assert road.z[:, hole] == pytest.approx(np.full((2, hole.sum()), -0.05), abs=1e-5)
+    assert obstacle_profile([9.99, 12.01], spec.obstacles[0]) == pytest.approx([0.0, 0.0])
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    length=st.floats(20.0, 400.0),
+    spacing=st.sampled_from([0.005, 0.01, 0.02, 0.025, 0.05]),
+    letter=st.sampled_from(CLASSES),
+    method=st.sampled_from(METHODS),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_any_valid_spec_gives_a_finite_road_on_the_grid(length, spacing, letter, method, seed):
+    road = generate_road(_road(letter, length, method, spacing_m=spacing), seed=seed)
+    assert road.x[0] == 0.0
+    assert road.x[-1] <= length + 1e-9 and road.x[-1] > length - spacing
+    np.testing.assert_allclose(np.diff(road.x), spacing, rtol=1e-9)
+    assert np.all(np.isfinite(road.z)) and road.z.shape == (2, road.x.size)
+    assert road.z.std() < 20 * np.sqrt(class_level(letter))  # no blow-up: std ~ sqrt(Gd) scale
+
+
+@settings(max_examples=25, deadline=None)
+@given(gd_n0=st.floats(1e-6, 1e-2), waviness=st.floats(1.5, 3.0))
+def test_fit_recovers_an_exact_power_law(gd_n0, waviness):
+    # A PSD that *is* the power law (no estimation noise): the fit must return it exactly.
+    n = np.linspace(0.0, 25.0, 20001)[1:]
+    fit = fit_iso(n, displacement_psd(n, gd_n0=gd_n0, waviness=waviness))
+    assert fit.waviness == pytest.approx(waviness, abs=2e-3)
+    assert fit.gd_n0_free == pytest.approx(gd_n0, rel=5e-3)
+    if waviness == 2.0:
+        assert fit.gd_n0 == pytest.approx(gd_n0, rel=5e-3)
