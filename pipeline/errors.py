@@ -9,8 +9,12 @@ exits with status 2. Anything else escaping is a bug and keeps its traceback.
 
 from __future__ import annotations
 
-__all__ = ["InputError"]
+__all__ = ["InputError", "RunError"]
 
 
 class InputError(ValueError):
     """Invalid user input: the message names the field, the allowed range and the value."""
+
+
+class RunError(RuntimeError):
+    """A valid request that could not be carried out (diverged simulation, no OpenGL, ...)."""

@@ -10,7 +10,12 @@ import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
-__all__ = ["atomic_write"]
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from pipeline.errors import InputError
+
+__all__ = ["atomic_write", "read_parquet_table"]
 
 
 def atomic_write(path: str | os.PathLike, write: Callable[[str], object]) -> None:
@@ -21,7 +26,7 @@ def atomic_write(path: str | os.PathLike, write: Callable[[str], object]) -> Non
     untouched, and the exception propagates.
     """
     path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=f".tmp{path.suffix}")
     os.close(fd)
     try:
         write(tmp)
@@ -30,3 +35,14 @@ def atomic_write(path: str | os.PathLike, write: Callable[[str], object]) -> Non
         if os.path.exists(tmp):
             os.remove(tmp)
         raise
+
+
+def read_parquet_table(path: str | os.PathLike, *, what: str) -> pa.Table:
+    """Read a Parquet file, or raise InputError naming `what` (e.g. "road file") and the problem."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"{what} {str(path)!r} does not exist")
+    try:
+        return pq.read_table(path)
+    except (pa.ArrowException, OSError) as error:
+        raise InputError(f"{what} {str(path)!r} is not a readable Parquet file ({error})") from None

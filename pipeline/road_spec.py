@@ -12,6 +12,7 @@ n0 = 0.1 cycle/m (ISO 8608 cycle form).
 
 from __future__ import annotations
 
+import re
 from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
@@ -165,20 +166,26 @@ class RoadSpec(BaseModel):
 
 
 def format_validation_error(error: ValidationError, *, prefix: str = "") -> str:
-    """One line per problem: ``field.path: message``, for the CLI."""
+    """One line per problem: ``field.path: message``, for the CLI.
+
+    Union branches are hidden from the path (``road: RoadSpec | "flat"`` reports
+    ``road.segments[0]...``), and a literal branch's "should be 'flat'" is dropped
+    when the other branch has something more specific to say.
+    """
+    items = error.errors()
     lines = []
-    for item in error.errors():
-        path = prefix + ".".join(
-            f"[{part}]" if isinstance(part, int) else str(part) for part in item["loc"]
-        ).replace(".[", "[")
+    for item in items:
+        parts = [str(p) for p in item["loc"]]
+        if any(p.startswith("literal[") for p in parts) and len(items) > 1:
+            continue
+        kept = [p for p in parts if not re.match(r"^(function-[\w-]+\[.*\]|[A-Z]\w*)$", p)]
+        path = prefix + ".".join(f"[{p}]" if p.isdigit() else p for p in kept).replace(".[", "[")
         message = item["msg"].removeprefix("Value error, ")
         if item["type"] == "extra_forbidden":
             message = "unknown field"
-        lines.append(
-            f"{path or '(road)'}: {message} (got {item.get('input')!r})"
-            if item["type"] not in ("missing", "value_error", "extra_forbidden")
-            else f"{path or '(road)'}: {message}"
-        )
+        elif item["type"] not in ("missing", "value_error"):
+            message = f"{message} (got {item.get('input')!r})"
+        lines.append(f"{path or '(top level)'}: {message}")
     return "; ".join(lines)
 
 

@@ -59,7 +59,7 @@ import scipy.fft
 import scipy.signal
 
 from pipeline.errors import InputError
-from pipeline.files import atomic_write
+from pipeline.files import atomic_write, read_parquet_table
 from pipeline.iso8608 import N0_CYCLES_PER_M, OMEGA0_RAD_PER_M
 from pipeline.road_spec import ObstacleSpec, RoadSpec
 
@@ -396,12 +396,7 @@ def read_road(path: str | os.PathLike) -> Road:
         If the file is missing, not Parquet, lacks a column, or holds bad values.
     """
     path = Path(path)
-    if not path.is_file():
-        raise InputError(f"road file {str(path)!r} does not exist")
-    try:
-        table = pq.read_table(path)
-    except (pa.ArrowException, OSError) as error:
-        raise InputError(f"road file {str(path)!r} is not a readable Parquet file ({error})") from None
+    table = read_parquet_table(path, what="road file")
     missing = [c for c in _COLUMNS if c not in table.column_names]
     if missing:
         raise InputError(
