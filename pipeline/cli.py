@@ -20,7 +20,7 @@ from typing import Annotated
 import typer
 import yaml
 
-from pipeline.errors import InputError
+from pipeline.errors import InputError, RunError
 from pipeline.iso8608 import CLASSES, class_bounds, level_cycle_to_omega
 from pipeline.road_spec import (
     MAX_SPACING_M,
@@ -263,17 +263,109 @@ def classify_command(
         )
 
 
+@app.command("simulate")
+def simulate_command(
+    out: Annotated[Path, typer.Option("--out", help="Output Parquet: one row per output sample, SI units.")],
+    scenario: Annotated[
+        Path | None,
+        typer.Option(help="Scenario file (.yaml/.toml/.json); or use the short form below."),
+    ] = None,
+    road_class: Annotated[
+        str | None, typer.Option("--road-class", help="Short form: ISO 8608 class A–H of a straight road.")
+    ] = None,
+    speed: Annotated[float | None, typer.Option(help="Short form: set speed, km/h (0–200).")] = None,
+    pressure: Annotated[
+        float | None, typer.Option(help="Short form: inflation pressure of all four tires, kPa (80–350).")
+    ] = None,
+    duration: Annotated[float | None, typer.Option(help="Short form: simulated time, s (0–3600).")] = None,
+    seed: Annotated[int | None, typer.Option(help="Short form: seed of road and sensor noise (≥ 0).")] = None,
+    timestep: Annotated[
+        float | None, typer.Option(help="Short form: integration step, s (1e-4–2e-3; default 1e-3).")
+    ] = None,
+    progress: Annotated[bool, typer.Option(help="Show a progress bar.")] = True,
+) -> None:
+    """Run the MuJoCo SUV through a scenario and write its ground truth and sensor signals."""
+    from pipeline.scenario import PRESSURE_MAX_KPA, PRESSURE_MIN_KPA, load_scenario, quick_scenario
+    from pipeline.simulator import simulate, write_run
+
+    _check_out(out, "--out", (".parquet",))
+    short = {"--road-class": road_class, "--speed": speed, "--pressure": pressure, "--duration": duration,
+             "--seed": seed, "--timestep": timestep}  # fmt: skip
+    given = [name for name, value in short.items() if value is not None]
+    if scenario is not None:
+        if given:
+            raise InputError(f"give --scenario or the short form, not both (got {', '.join(given)})")
+        sc = load_scenario(scenario)
+    else:
+        if road_class is None or speed is None or pressure is None or duration is None:
+            raise InputError("give --scenario FILE, or --road-class, --speed, --pressure and --duration")
+        if road_class.strip().upper() not in CLASSES:
+            raise InputError(f"--road-class must be one of A–H, got {road_class!r}")
+        if not 0.0 <= speed <= 200.0:
+            raise InputError(f"--speed must be in [0, 200] km/h, got {speed:g}")
+        if not PRESSURE_MIN_KPA <= pressure <= PRESSURE_MAX_KPA:
+            raise InputError(
+                f"--pressure must be in [{PRESSURE_MIN_KPA:g}, {PRESSURE_MAX_KPA:g}] kPa, got {pressure:g}"
+            )
+        if not 0.0 < duration <= 3600.0:
+            raise InputError(f"--duration must be in (0, 3600] s, got {duration:g}")
+        if seed is not None and seed < 0:
+            raise InputError(f"--seed must be ≥ 0, got {seed}")
+        if timestep is not None and not 1e-4 <= timestep <= 2e-3:
+            raise InputError(f"--timestep must be in [1e-4, 2e-3] s, got {timestep:g}")
+        sc = quick_scenario(
+            road_class=road_class.strip().upper(),
+            speed_kmh=speed,
+            pressure_kpa=pressure,
+            duration_s=duration,
+            seed=0 if seed is None else seed,
+            timestep_s=1e-3 if timestep is None else timestep,
+        )
+    result = simulate(sc, progress=progress)
+    write_run(result, out)
+    wall = result.metadata["wall_time_s"]
+    typer.echo(
+        f"wrote {out}: {len(result.table)} samples over {sc.duration_s:g} s "
+        f"({sc.n_steps} steps in {wall:.2f} s, {sc.duration_s / wall:.0f}x real time)"
+    )
+
+
+@app.command("render")
+def render_command(
+    run: Annotated[Path, typer.Argument(help="Run file written by 'suvtwin simulate'.")],
+    out: Annotated[Path, typer.Option("--out", help="Output video (.mp4).")],
+    fps: Annotated[int, typer.Option(help="Frames per second (1–120).")] = 30,
+    width: Annotated[int, typer.Option(help="Frame width, pixels (64–1280).")] = 1024,
+    height: Annotated[int, typer.Option(help="Frame height, pixels (64–720).")] = 576,
+    camera: Annotated[str, typer.Option(help="Camera: chase or side.")] = "chase",
+) -> None:
+    """Render a run headless with MuJoCo (MUJOCO_GL=egl) to an MP4 video."""
+    _check_out(out, "--out", (".mp4",))
+    if not 1 <= fps <= 120:
+        raise InputError(f"--fps must be in [1, 120], got {fps}")
+    if not (64 <= width <= 1280 and 64 <= height <= 720):
+        raise InputError(f"--width/--height must be in [64, 1280] x [64, 720] pixels, got {width} x {height}")
+    from pipeline.render import render_run
+
+    frames = render_run(run, out, fps=fps, width=width, height=height, camera=camera)
+    typer.echo(f"wrote {out} ({frames} frames at {fps} fps)")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI with `argv` (default: ``sys.argv[1:]``); return the exit status.
 
     0 on success; 2 on bad input (one message on stderr, no output written) or a
-    usage error (typer's message); 1 if interrupted.
+    usage error (typer's message); 1 if the run could not be carried out (diverged,
+    no OpenGL) or was interrupted.
     """
     try:
         app(args=argv, prog_name="suvtwin")
     except InputError as error:
         typer.echo(f"suvtwin: error: {error}", err=True)
         return 2
+    except RunError as error:
+        typer.echo(f"suvtwin: error: {error}", err=True)
+        return 1
     except SystemExit as done:
         if done.code is None or isinstance(done.code, int):
             return done.code or 0

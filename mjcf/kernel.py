@@ -1,0 +1,578 @@
+r"""Per-step forces of the SUV: suspension, tire–road contact, driver; and the step log.
+
+Usual call (inside the simulator loop)::
+
+    mujoco.mj_step1(model, data)
+    step_kernel(k, *views, *packed, state, log)
+    mujoco.mj_step2(model, data)
+
+Everything here runs once per integration step, so it is compiled with numba
+(DESIGN.md: plain numpy over four wheels ran at 15k steps/s, a compiled kernel on
+cached MjData views at ~120k). It writes:
+
+- ``qfrc_applied`` on the four suspension slide joints: progressive spring with
+  preload, bump and rebound stops, asymmetric digressive damper, anti-roll bars;
+- ``xfrc_applied`` on the four wheels: the tire force at the contact point
+  (vertical from radial deflection over the heightfield road, enveloped over the
+  contact patch; longitudinal/lateral from MF-Tyre 6.1 with pressure effects and
+  first-order relaxation), rolling resistance; on the chassis: aerodynamic drag;
+- ``ctrl``: Ackermann steering angles from one road-wheel angle (lane keeping by
+  pure pursuit, a circle, or an open-loop series) and drive/brake torque from a PI
+  speed controller;
+- one row of the log per step (:data:`LOG_COLUMNS`).
+
+Road height under a tire (``envelope`` contact): the heightfield data are read at
+``n`` points along the wheel's heading over ±``l_e`` about the wheel centre and
+averaged with cos² weights; their weighted least-squares slope tilts the
+effective road plane. The deflection is the unloaded radius minus the distance
+from the wheel centre to that plane. This is the "effective road plane" idea of
+enveloping tyre models (Schmeitz 2004; Pacejka 2012, §10.2) in its simplest form.
+
+Frames: world z up; chassis x forward, y left. Free-joint linear velocity is in
+the world frame, angular velocity in the body frame (MuJoCo convention).
+
+References
+----------
+.. [1] H. B. Pacejka, *Tire and Vehicle Dynamics*, 3rd ed., Butterworth-Heinemann, 2012.
+.. [2] A. J. C. Schmeitz, "A semi-empirical three-dimensional model of the pneumatic tyre
+   rolling over arbitrarily uneven road surfaces", PhD thesis, TU Delft, 2004.
+.. [3] R. C. Coulter, "Implementation of the pure pursuit path tracking algorithm",
+   CMU-RI-TR-92-01, 1992.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+import numba
+import numpy as np
+
+from mjcf.tire import (
+    I_UNLOADED_RADIUS,
+    effective_rolling_radius,
+    tire_forces,
+    vertical_force,
+    vertical_stiffness,
+)
+from mjcf.vehicle import CORNERS, GRAVITY
+
+
+def _drop_stale_cache() -> None:
+    """Delete this module's numba cache when a module it inlines has changed.
+
+    numba's cache is keyed on this file alone; the kernel inlines the tire model
+    (``tire.py``) and constants from ``vehicle.py``, so a change there would
+    otherwise run stale machine code.
+    """
+    here = Path(__file__).parent
+    try:
+        digest = hashlib.sha256(
+            b"".join((here / name).read_bytes() for name in ("kernel.py", "tire.py", "vehicle.py"))
+        ).hexdigest()
+        cache = here / "__pycache__"
+        stamp = cache / "kernel.deps"
+        if stamp.is_file() and stamp.read_text() == digest:
+            return
+        for stale in cache.glob("kernel.*.nb[ic]"):
+            stale.unlink(missing_ok=True)
+        cache.mkdir(exist_ok=True)
+        stamp.write_text(digest)
+    except OSError:  # read-only install: numba then caches elsewhere or not at all
+        pass
+
+
+_drop_stale_cache()
+
+
+__all__ = [
+    "CORNER_FIELDS",
+    "GLOBAL_FIELDS",
+    "LOG_COLUMNS",
+    "MODE_CIRCLE",
+    "MODE_LANE",
+    "MODE_OPEN_LOOP",
+    "finish_log",
+    "pack_ids",
+    "pack_vehicle",
+    "road_height",
+    "step_kernel",
+]
+
+MODE_LANE, MODE_CIRCLE, MODE_OPEN_LOOP = 0, 1, 2
+
+GLOBAL_FIELDS = (
+    "t_s",
+    "speed_mps",
+    "steer_rad",
+    "lat_accel_mps2",
+    "long_accel_mps2",
+    "yaw_rate_radps",
+    "heave_m",
+    "pitch_rad",
+    "roll_rad",
+    "yaw_rad",
+    "x_m",
+    "y_m",
+)
+CORNER_FIELDS = (
+    "accel_sprung_true_mps2",
+    "accel_unsprung_true_mps2",
+    "z_sprung_m",
+    "z_unsprung_m",
+    "v_sprung_mps",
+    "v_unsprung_mps",
+    "road_z_m",
+    "pressure_pa",
+    "tire_stiffness_npm",
+    "tire_fz_n",
+    "tire_fx_n",
+    "tire_fy_n",
+    "tire_slip_ratio",
+    "tire_slip_angle_rad",
+    "tire_deflection_m",
+    "susp_force_n",
+    "susp_travel_m",
+    "wheel_speed_radps",
+)
+LOG_COLUMNS = GLOBAL_FIELDS + tuple(f"{c}_{f}" for f in CORNER_FIELDS for c in CORNERS)
+"""Column names of the raw step log: globals, then each corner field for fl, fr, rl, rr."""
+
+_NG = len(GLOBAL_FIELDS)
+# first column of each corner field (corner i adds i)
+(
+    C_ACC_SPRUNG,
+    C_ACC_UNSPRUNG,
+    C_Z_SPRUNG,
+    C_Z_UNSPRUNG,
+    C_V_SPRUNG,
+    C_V_UNSPRUNG,
+    C_ROAD_Z,
+    C_PRESSURE,
+    C_KT,
+    C_FZ,
+    C_FX,
+    C_FY,
+    C_KAPPA,
+    C_ALPHA,
+    C_DEFLECTION,
+    C_SUSP_FORCE,
+    C_SUSP_TRAVEL,
+    C_WHEEL_SPEED,
+) = range(_NG, _NG + 4 * len(CORNER_FIELDS), 4)
+
+# ---- packed integer ids (pack_ids) ----
+I_CHASSIS_BODY, I_CHASSIS_QPOS, I_CHASSIS_DOF = 0, 1, 2
+I_CARRIER, I_KNUCKLE, I_WHEEL = 3, 7, 11
+I_SUSP_QPOS, I_SUSP_DOF, I_SPIN_DOF = 15, 19, 23
+I_STEER_ACT, I_DRIVE_ACT = 27, 29
+I_ACC_SPRUNG, I_ACC_UNSPRUNG, I_ACC_IMU = 33, 37, 41
+I_RING_QPOS, I_RING_DOF = 42, 46  # native contact only (-1 otherwise)
+N_IDS = 50
+
+# ---- packed vehicle parameters (pack_vehicle) ----
+V_PRELOAD, V_SPRING = 0, 4  # per corner
+V_WHEEL_Z = 8  # per corner: design wheel-centre z relative to chassis CoG, m
+(
+    V_PROGRESSION,
+    V_BUMP_CLEAR,
+    V_BUMP_LIN,
+    V_BUMP_QUAD,
+    V_REB_CLEAR,
+    V_REB_LIN,
+    V_REB_QUAD,
+    V_C_COMP_LOW,
+    V_C_COMP_HIGH,
+    V_C_REB_LOW,
+    V_C_REB_HIGH,
+    V_V_KNEE,
+    V_ARB_F,
+    V_ARB_R,
+    V_WHEELBASE,
+    V_TRACK_F,
+    V_A2,
+    V_MAX_STEER,
+    V_SIGMA_X,
+    V_SIGMA_Y,
+    V_ROLL_RES,
+    V_ENV_HALF,
+    V_ENV_N,
+    V_DRAG,
+    V_KP_SPEED,
+    V_KI_SPEED,
+    V_MAX_DRIVE,
+    V_MAX_BRAKE,
+    V_PREVIEW_T,
+    V_PREVIEW_MIN,
+    V_COG_HEIGHT,
+    V_CONTACT_NATIVE,
+) = range(12, 44)
+N_VEHICLE = 44
+
+# ---- state scratch ----
+S_INTEGRAL = 0
+S_SLIP_U = 1  # 4: longitudinal tyre deflection (relaxation), m
+S_SLIP_V = 5  # 4: lateral tyre deflection (relaxation), m
+S_R_PREV = 9  # 9: chassis rotation matrix of the previous step
+S_STEER = 18
+N_STATE = 19
+
+
+def pack_ids(ids: dict) -> np.ndarray:
+    """Pack the builder's id dict (plus the IMU sensor adr) into the int64 layout above."""
+    out = np.zeros(N_IDS, dtype=np.int64)
+    out[I_CHASSIS_BODY] = ids["chassis_body"][0]
+    out[I_CHASSIS_QPOS] = ids["chassis_qpos"][0]
+    out[I_CHASSIS_DOF] = ids["chassis_dof"][0]
+    out[I_CARRIER : I_CARRIER + 4] = ids["carrier_body"]
+    out[I_KNUCKLE : I_KNUCKLE + 4] = ids["knuckle_body"]
+    out[I_WHEEL : I_WHEEL + 4] = ids["wheel_body"]
+    out[I_SUSP_QPOS : I_SUSP_QPOS + 4] = ids["susp_qpos"]
+    out[I_SUSP_DOF : I_SUSP_DOF + 4] = ids["susp_dof"]
+    out[I_SPIN_DOF : I_SPIN_DOF + 4] = ids["spin_dof"]
+    out[I_STEER_ACT : I_STEER_ACT + 2] = ids["steer_act"]
+    out[I_DRIVE_ACT : I_DRIVE_ACT + 4] = ids["drive_act"]
+    out[I_ACC_SPRUNG : I_ACC_SPRUNG + 4] = ids["acc_sprung"]
+    out[I_ACC_UNSPRUNG : I_ACC_UNSPRUNG + 4] = ids["acc_unsprung"]
+    out[I_ACC_IMU] = ids["acc_imu"][0]
+    out[I_RING_QPOS : I_RING_QPOS + 4] = ids["ring_qpos"]
+    out[I_RING_DOF : I_RING_DOF + 4] = ids["ring_dof"]
+    return out
+
+
+def pack_vehicle(vm) -> np.ndarray:
+    """Pack a :class:`mjcf.builder.VehicleModel`'s suspension, tire-extra and driver values."""
+    v = vm.vehicle
+    s, t, d, c = v.suspension, v.tire, v.driver, v.chassis
+    out = np.zeros(N_VEHICLE)
+    out[V_PRELOAD : V_PRELOAD + 4] = vm.spring_preload
+    out[V_SPRING : V_SPRING + 4] = v.spring_rate
+    out[V_WHEEL_Z : V_WHEEL_Z + 4] = vm.wheel_center_z
+    out[V_PROGRESSION] = s.spring_progression
+    out[V_BUMP_CLEAR], out[V_BUMP_LIN], out[V_BUMP_QUAD] = (
+        s.bump_stop_clearance,
+        s.bump_stop_linear,
+        s.bump_stop_quadratic,
+    )
+    out[V_REB_CLEAR], out[V_REB_LIN], out[V_REB_QUAD] = (
+        s.rebound_stop_clearance,
+        s.rebound_stop_linear,
+        s.rebound_stop_quadratic,
+    )
+    out[V_C_COMP_LOW], out[V_C_COMP_HIGH] = s.damper_compression_low, s.damper_compression_high
+    out[V_C_REB_LOW], out[V_C_REB_HIGH] = s.damper_rebound_low, s.damper_rebound_high
+    out[V_V_KNEE] = s.damper_knee_velocity
+    out[V_ARB_F], out[V_ARB_R] = s.anti_roll_front, s.anti_roll_rear
+    out[V_WHEELBASE], out[V_TRACK_F], out[V_A2] = v.wheelbase, c.track_front, c.a2
+    out[V_MAX_STEER] = v.steering.max_angle
+    out[V_SIGMA_X], out[V_SIGMA_Y] = t.relaxation_length_longitudinal, t.relaxation_length_lateral
+    out[V_ROLL_RES] = t.rolling_resistance
+    out[V_ENV_HALF], out[V_ENV_N] = t.envelope_half_length, t.envelope_points
+    out[V_DRAG] = 0.5 * c.air_density * c.drag_coefficient * c.frontal_area
+    out[V_KP_SPEED], out[V_KI_SPEED] = d.speed_gain, d.speed_integral_gain
+    out[V_MAX_DRIVE], out[V_MAX_BRAKE] = d.max_drive_torque, d.max_brake_torque
+    out[V_PREVIEW_T], out[V_PREVIEW_MIN] = d.preview_time, d.preview_min
+    out[V_COG_HEIGHT] = c.cog_height
+    out[V_CONTACT_NATIVE] = 1.0 if vm.contact == "native" else 0.0
+    return out
+
+
+@numba.njit(cache=True)
+def road_height(x, y, hf, hdata):
+    """Heightfield elevation at world (x, y), m: bilinear in the grid, clamped at its edges.
+
+    `hf` = (x0, dx, y0, dy, nrow, ncol, z_base, z_scale) from :class:`mjcf.builder.VehicleModel`;
+    `hdata` the (nrow, ncol) data, height = z_base + data·z_scale.
+    """
+    nrow, ncol = int(hf[4]), int(hf[5])
+    fx = (x - hf[0]) / hf[1]
+    fy = (y - hf[2]) / hf[3]
+    fx = min(max(fx, 0.0), ncol - 1.000001)
+    fy = min(max(fy, 0.0), nrow - 1.000001)
+    i, j = int(fy), int(fx)
+    ty, tx = fy - i, fx - j
+    h00, h01 = hdata[i, j], hdata[i, j + 1]
+    h10, h11 = hdata[i + 1, j], hdata[i + 1, j + 1]
+    h = (1 - ty) * ((1 - tx) * h00 + tx * h01) + ty * ((1 - tx) * h10 + tx * h11)
+    return hf[6] + h * hf[7]
+
+
+@numba.njit(cache=True)
+def _envelope(cx, cy, fx, fy, half, npts, hf, hdata):
+    """cos²-weighted mean road height and slope along (fx, fy) over ±half about (cx, cy)."""
+    wsum, zsum, szs, sss = 0.0, 0.0, 0.0, 0.0
+    n = int(npts)
+    zs = np.empty(n)
+    ss = np.empty(n)
+    ws = np.empty(n)
+    for j in range(n):
+        s = half * (2.0 * (j + 0.5) / n - 1.0)
+        w = np.cos(0.5 * np.pi * s / half) ** 2
+        z = road_height(cx + s * fx, cy + s * fy, hf, hdata)
+        zs[j], ss[j], ws[j] = z, s, w
+        wsum += w
+        zsum += w * z
+    zmean = zsum / wsum
+    for j in range(n):
+        szs += ws[j] * ss[j] * (zs[j] - zmean)
+        sss += ws[j] * ss[j] * ss[j]
+    return zmean, szs / sss
+
+
+@numba.njit(cache=True)
+def _damper(v, vp):
+    """Damper force for compression velocity v (m/s, > 0 in bump), N; digressive, asymmetric."""
+    knee = vp[V_V_KNEE]
+    if v >= 0.0:
+        lo, hi = vp[V_C_COMP_LOW], vp[V_C_COMP_HIGH]
+    else:
+        lo, hi = vp[V_C_REB_LOW], vp[V_C_REB_HIGH]
+    a = abs(v)
+    f = lo * a if a <= knee else lo * knee + hi * (a - knee)
+    return f if v >= 0.0 else -f
+
+
+@numba.njit(cache=True)
+def _spring(i, s, vp):
+    """Spring + stop force for compression s (m) at corner i, N (> 0 pushes the wheel down)."""
+    k = vp[V_SPRING + i]
+    f = vp[V_PRELOAD + i] + k * s
+    if s > 0.0:
+        f += k * vp[V_PROGRESSION] * s**3
+    e = s - vp[V_BUMP_CLEAR]
+    if e > 0.0:
+        f += vp[V_BUMP_LIN] * e + vp[V_BUMP_QUAD] * e * e
+    e = -s - vp[V_REB_CLEAR]
+    if e > 0.0:
+        f -= vp[V_REB_LIN] * e + vp[V_REB_QUAD] * e * e
+    return f
+
+
+@numba.njit(cache=True)
+def step_kernel(
+    k,
+    dt,
+    qpos,
+    qvel,
+    xpos,
+    xmat,
+    sensordata,
+    qfrc_applied,
+    xfrc_applied,
+    ctrl,
+    ids,
+    hf,
+    hdata,
+    vp,
+    tp,
+    pressure,
+    speed_ref,
+    steer_cmd,
+    mode,
+    state,
+    log,
+):
+    """Apply the forces of step `k` (state at t_k after ``mj_step1``) and log row `k`.
+
+    Also completes row k-1 with the accelerations MuJoCo computed in the previous
+    ``mj_step2``. Shapes: `pressure` (nstep, 4) Pa, `speed_ref` (nstep,) m/s,
+    `steer_cmd` (nstep,) rad, `mode` (6,) = (kind, lane_y or cx, cy, radius, direction, 0),
+    `log` (nstep, len(LOG_COLUMNS)).
+    """
+    cb = ids[I_CHASSIS_BODY]
+    cq = ids[I_CHASSIS_QPOS]
+    cd = ids[I_CHASSIS_DOF]
+    px, py, pz = qpos[cq], qpos[cq + 1], qpos[cq + 2]
+    R = xmat[cb].reshape(3, 3)
+    vx, vy, vz = qvel[cd], qvel[cd + 1], qvel[cd + 2]
+    wl0, wl1, wl2 = qvel[cd + 3], qvel[cd + 4], qvel[cd + 5]
+    wx = R[0, 0] * wl0 + R[0, 1] * wl1 + R[0, 2] * wl2
+    wy = R[1, 0] * wl0 + R[1, 1] * wl1 + R[1, 2] * wl2
+    wz = R[2, 0] * wl0 + R[2, 1] * wl1 + R[2, 2] * wl2
+    yaw = np.arctan2(R[1, 0], R[0, 0])
+    hx, hy = np.cos(yaw), np.sin(yaw)
+    speed = vx * hx + vy * hy
+
+    # ---- accelerations of the previous step (computed by the last mj_step2) ----
+    if k > 0:
+        _log_accelerations(k - 1, sensordata, ids, state, log)
+    for j in range(9):
+        state[S_R_PREV + j] = R.ravel()[j]
+
+    # ---- driver: speed ----
+    err = speed_ref[k] - speed
+    integral = state[S_INTEGRAL] + err * dt
+    torque = vp[V_KP_SPEED] * err + vp[V_KI_SPEED] * integral
+    per_wheel = torque / 4.0
+    if per_wheel > vp[V_MAX_DRIVE] or per_wheel < -vp[V_MAX_BRAKE]:
+        integral = state[S_INTEGRAL]  # anti-windup: hold the integral while saturated
+        per_wheel = min(max(per_wheel, -vp[V_MAX_BRAKE]), vp[V_MAX_DRIVE])
+    state[S_INTEGRAL] = integral
+    for i in range(4):
+        ctrl[ids[I_DRIVE_ACT + i]] = per_wheel
+
+    # ---- driver: steering (road-wheel angle of the bicycle model) ----
+    wb = vp[V_WHEELBASE]
+    if mode[0] == MODE_OPEN_LOOP:
+        delta = steer_cmd[k]
+    else:
+        rx, ry = px - vp[V_A2] * hx, py - vp[V_A2] * hy  # rear-axle centre
+        look = max(vp[V_PREVIEW_MIN], abs(speed) * vp[V_PREVIEW_T])
+        if mode[0] == MODE_LANE:
+            tx, ty = rx + look, mode[1]
+        else:
+            theta = np.arctan2(ry - mode[2], rx - mode[1]) + mode[4] * look / mode[3]
+            tx, ty = mode[1] + mode[3] * np.cos(theta), mode[2] + mode[3] * np.sin(theta)
+        eta = np.arctan2(ty - ry, tx - rx) - yaw
+        eta = np.arctan2(np.sin(eta), np.cos(eta))
+        dist = np.hypot(tx - rx, ty - ry)
+        delta = np.arctan(2.0 * wb * np.sin(eta) / dist)
+    delta = min(max(delta, -vp[V_MAX_STEER]), vp[V_MAX_STEER])
+    state[S_STEER] = delta
+    tan_d = np.tan(delta)
+    half_t = 0.5 * vp[V_TRACK_F]
+    ctrl[ids[I_STEER_ACT]] = np.arctan(wb * tan_d / (wb - half_t * tan_d))  # left (inner when delta > 0)
+    ctrl[ids[I_STEER_ACT + 1]] = np.arctan(wb * tan_d / (wb + half_t * tan_d))
+
+    # ---- suspension ----
+    travel = np.empty(4)
+    rate = np.empty(4)
+    for i in range(4):
+        travel[i] = qpos[ids[I_SUSP_QPOS + i]]  # compression: wheel up relative to the body
+        rate[i] = qvel[ids[I_SUSP_DOF + i]]
+    for i in range(4):
+        arb = vp[V_ARB_F] if i < 2 else vp[V_ARB_R]
+        other = i + 1 if i % 2 == 0 else i - 1
+        force = _spring(i, travel[i], vp) + _damper(rate[i], vp) + arb * (travel[i] - travel[other])
+        qfrc_applied[ids[I_SUSP_DOF + i]] = -force
+        log[k, C_SUSP_FORCE + i] = force
+        log[k, C_SUSP_TRAVEL + i] = travel[i]
+
+    # ---- tires ----
+    native = vp[V_CONTACT_NATIVE] > 0.5
+    for i in range(4):
+        wbody = ids[I_WHEEL + i]
+        kn = xmat[ids[I_KNUCKLE + i]].reshape(3, 3)
+        cx, cy, cz = xpos[wbody, 0], xpos[wbody, 1], xpos[wbody, 2]
+        # wheel-centre velocity: chassis point velocity + slide along the chassis z axis
+        rx_, ry_, rz_ = cx - px, cy - py, cz - pz
+        qd = qvel[ids[I_SUSP_DOF + i]]
+        ux = vx + wy * rz_ - wz * ry_ + R[0, 2] * qd
+        uy = vy + wz * rx_ - wx * rz_ + R[1, 2] * qd
+        uz = vz + wx * ry_ - wy * rx_ + R[2, 2] * qd
+        # sprung point above the wheel (slide anchor) and its vertical velocity
+        log[k, C_Z_SPRUNG + i] = cz + R[2, 2] * qpos[ids[I_SUSP_QPOS + i]] * -1.0
+        log[k, C_V_SPRUNG + i] = uz - R[2, 2] * qd
+        log[k, C_Z_UNSPRUNG + i] = cz
+        log[k, C_V_UNSPRUNG + i] = uz
+        # heading of the wheel in the ground plane
+        sx, sy = kn[0, 1], kn[1, 1]
+        norm = np.hypot(sx, sy)
+        fx, fy = sy / norm, -sx / norm
+        zr, slope = _envelope(cx, cy, fx, fy, vp[V_ENV_HALF], vp[V_ENV_N], hf, hdata)
+        inv = 1.0 / np.sqrt(1.0 + slope * slope)
+        nx, ny, nz = -slope * fx * inv, -slope * fy * inv, inv
+        dist = (cz - zr) * inv
+        deflection = tp[I_UNLOADED_RADIUS] - dist
+        vfwd = ux * fx + uy * fy
+        deflection_rate = -(uz - slope * vfwd) * inv
+        p = pressure[k, i]
+        log[k, C_ROAD_Z + i] = zr
+        log[k, C_PRESSURE + i] = p
+        log[k, C_KT + i] = vertical_stiffness(p, tp)
+        log[k, C_DEFLECTION + i] = deflection
+        omega = qvel[ids[I_SPIN_DOF + i]]
+        log[k, C_WHEEL_SPEED + i] = omega
+        if native:
+            # MuJoCo's contact holds the ring sphere on the road; the tyre spring acts on its slide
+            deflection = qpos[ids[I_RING_QPOS + i]]
+            deflection_rate = qvel[ids[I_RING_DOF + i]]
+            dist = tp[I_UNLOADED_RADIUS] - deflection
+            slope, inv = 0.0, 1.0
+            nx, ny, nz = 0.0, 0.0, 1.0
+            log[k, C_DEFLECTION + i] = deflection
+        fz = vertical_force(deflection, deflection_rate, p, tp)
+        if native:
+            qfrc_applied[ids[I_RING_DOF + i]] = -fz
+        # tangent directions of the effective road plane
+        tx_, ty_, tz_ = fx * inv, fy * inv, slope * inv
+        lx, ly, lz = ny * tz_ - nz * ty_, nz * tx_ - nx * tz_, nx * ty_ - ny * tx_
+        v_long = ux * tx_ + uy * ty_ + uz * tz_
+        v_lat = ux * lx + uy * ly + uz * lz
+        re = effective_rolling_radius(fz, p, tp)
+        slip_x = v_long - omega * re
+        gain = dt * abs(v_long)
+        u = (state[S_SLIP_U + i] - dt * slip_x) / (1.0 + gain / vp[V_SIGMA_X])
+        w = (state[S_SLIP_V + i] - dt * v_lat) / (1.0 + gain / vp[V_SIGMA_Y])
+        state[S_SLIP_U + i] = u
+        state[S_SLIP_V + i] = w
+        kappa = u / vp[V_SIGMA_X]
+        alpha = np.arctan(-w / vp[V_SIGMA_Y])
+        f_long, f_lat = tire_forces(fz, kappa, alpha, p, tp)
+        Fx = fz * nx + f_long * tx_ + f_lat * lx
+        Fy = fz * ny + f_long * ty_ + f_lat * ly
+        Fz = fz * nz + f_long * tz_ + f_lat * lz
+        # contact point relative to the wheel centre
+        ox, oy, oz = -dist * nx, -dist * ny, -dist * nz
+        roll_torque = -vp[V_ROLL_RES] * fz * dist * np.tanh(omega)
+        if native:  # the vertical force already reaches the wheel through the ring's slide
+            Fx, Fy, Fz = Fx - fz * nx, Fy - fz * ny, Fz - fz * nz
+        xfrc_applied[wbody, 0] = Fx
+        xfrc_applied[wbody, 1] = Fy
+        xfrc_applied[wbody, 2] = Fz
+        xfrc_applied[wbody, 3] = oy * Fz - oz * Fy + roll_torque * kn[0, 1]
+        xfrc_applied[wbody, 4] = oz * Fx - ox * Fz + roll_torque * kn[1, 1]
+        xfrc_applied[wbody, 5] = ox * Fy - oy * Fx + roll_torque * kn[2, 1]
+        log[k, C_FZ + i] = fz
+        log[k, C_FX + i] = f_long
+        log[k, C_FY + i] = f_lat
+        log[k, C_KAPPA + i] = kappa
+        log[k, C_ALPHA + i] = alpha
+
+    # ---- aerodynamic drag on the chassis (horizontal, opposite the velocity) ----
+    vh = np.hypot(vx, vy)
+    xfrc_applied[cb, 0] = -vp[V_DRAG] * vh * vx
+    xfrc_applied[cb, 1] = -vp[V_DRAG] * vh * vy
+
+    # ---- globals ----
+    log[k, 0] = k * dt
+    log[k, 1] = speed
+    log[k, 2] = delta
+    log[k, 5] = wz
+    log[k, 6] = pz - vp[V_COG_HEIGHT]
+    log[k, 7] = np.arcsin(min(max(-R[2, 0], -1.0), 1.0))
+    log[k, 8] = np.arctan2(R[2, 1], R[2, 2])
+    log[k, 9] = yaw
+    log[k, 10] = px
+    log[k, 11] = py
+
+
+def finish_log(
+    k_last: int, sensordata: np.ndarray, ids: np.ndarray, state: np.ndarray, log: np.ndarray
+) -> None:
+    """Write the accelerations of the last step (after the final ``mj_step2``) into its row."""
+    _log_accelerations(k_last, sensordata, ids, state, log)
+
+
+@numba.njit(cache=True)
+def _log_accelerations(row, sensordata, ids, state, log):
+    """World-frame accelerations, gravity removed, from the accelerometers of step `row`.
+
+    MuJoCo's accelerometers read proper acceleration in the site frame; the sites
+    are aligned with the chassis, whose rotation at that step is kept in `state`.
+    """
+    Rp = state[S_R_PREV : S_R_PREV + 9].reshape(3, 3)
+    for i in range(4):
+        for which in range(2):
+            adr = ids[I_ACC_SPRUNG + i] if which == 0 else ids[I_ACC_UNSPRUNG + i]
+            a0, a1, a2 = sensordata[adr], sensordata[adr + 1], sensordata[adr + 2]
+            az = Rp[2, 0] * a0 + Rp[2, 1] * a1 + Rp[2, 2] * a2 - GRAVITY
+            col = C_ACC_SPRUNG if which == 0 else C_ACC_UNSPRUNG
+            log[row, col + i] = az
+    adr = ids[I_ACC_IMU]
+    a0, a1, a2 = sensordata[adr], sensordata[adr + 1], sensordata[adr + 2]
+    ax = Rp[0, 0] * a0 + Rp[0, 1] * a1 + Rp[0, 2] * a2
+    ay = Rp[1, 0] * a0 + Rp[1, 1] * a1 + Rp[1, 2] * a2
+    pyaw = np.arctan2(Rp[1, 0], Rp[0, 0])
+    log[row, 3] = -np.sin(pyaw) * ax + np.cos(pyaw) * ay
+    log[row, 4] = np.cos(pyaw) * ax + np.sin(pyaw) * ay

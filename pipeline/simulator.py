@@ -1,0 +1,287 @@
+"""The ground-truth simulator: the MuJoCo SUV driven through a scenario, with its sensors.
+
+Usual call: ``result = simulate(load_scenario("s.yaml")); write_run(result, "run.parquet")``.
+
+One run: build the road (seeded from the scenario), compile the SUV on it
+(:func:`mjcf.builder.build_model`), place the car at rest-deflection over the road
+at the set speed, then step MuJoCo with the compiled force kernel
+(:func:`mjcf.kernel.step_kernel`) between ``mj_step1`` and ``mj_step2``. The
+step log is decimated to the output rate; the accelerometer signals get white
+noise from the scenario's noise stream. Output: one row per output sample, SI
+units (pressure also in kPa), see :data:`OUTPUT_COLUMNS`.
+
+Accelerations ``{c}_accel_sprung_mps2`` / ``{c}_accel_unsprung_mps2`` are vertical
+(world z), gravity removed, at the chassis point above the wheel centre and at the
+wheel centre; ``_true`` columns are the same without noise.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import dataclass
+from importlib import metadata
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+from mjcf.tire import effective_rolling_radius, vertical_stiffness
+
+from mjcf.builder import HALF_WIDTH_Y, VehicleModel, build_model
+from mjcf.kernel import (
+    CORNER_FIELDS,
+    GLOBAL_FIELDS,
+    LOG_COLUMNS,
+    MODE_CIRCLE,
+    MODE_LANE,
+    MODE_OPEN_LOOP,
+    N_STATE,
+    finish_log,
+    pack_ids,
+    pack_vehicle,
+    road_height,
+)
+from mjcf.vehicle import CORNERS, load_vehicle
+from pipeline.errors import InputError, RunError
+from pipeline.files import atomic_write, read_parquet_table
+from pipeline.roads import Road, generate_road
+from pipeline.scenario import END_MARGIN_M, START_MARGIN_M, Scenario
+
+__all__ = ["OUTPUT_COLUMNS", "SimResult", "SimulationError", "prepare", "read_run", "simulate", "write_run"]
+
+_METADATA_KEY = b"suvtwin.run"
+
+
+class SimulationError(RunError):
+    """The simulation diverged (non-finite state) or MuJoCo raised warnings."""
+
+
+def _output_columns() -> tuple[str, ...]:
+    cols = list(GLOBAL_FIELDS)
+    for c in CORNERS:
+        cols += [f"{c}_accel_sprung_mps2", f"{c}_accel_unsprung_mps2"]
+        for field in CORNER_FIELDS:
+            cols.append(f"{c}_{field.replace('pressure_pa', 'pressure_kpa')}")
+    return tuple(cols)
+
+
+OUTPUT_COLUMNS = _output_columns()
+"""Columns of a run's table, in order."""
+
+
+@dataclass(frozen=True)
+class SimResult:
+    """A finished run: its table (one row per output sample) and its metadata."""
+
+    table: pd.DataFrame
+    scenario: Scenario
+    metadata: dict
+
+
+@dataclass
+class _Prepared:
+    vm: VehicleModel
+    data: mujoco.MjData
+    road: Road
+    inputs: dict
+
+
+def _road_for(scenario: Scenario) -> tuple[Road, float]:
+    """The scenario's road and the heightfield half-width it needs."""
+    vehicle_reach = 5.0
+    if scenario.road == "flat":
+        x_min, x_max, half = -50.0, scenario.distance_m() + 200.0, HALF_WIDTH_Y
+        if scenario.steering.mode == "circle":
+            radius = scenario.steering.radius_m
+            x_min, x_max, half = -radius - 50.0, radius + 50.0, 2 * radius + 50.0
+        x = np.linspace(x_min, x_max, 3)
+        return Road(x=x, z=np.zeros((2, 3))), half
+    road = generate_road(scenario.road, seed=scenario.road_seed())
+    needed = START_MARGIN_M + scenario.distance_m() + vehicle_reach + END_MARGIN_M
+    if road.length_m < needed:
+        raise InputError(
+            f"road is {road.length_m:g} m long but the run needs ≥ {needed:.1f} m "
+            f"(start {START_MARGIN_M:g} m + {scenario.distance_m():.1f} m driven + vehicle and margin)"
+        )
+    return road, HALF_WIDTH_Y
+
+
+def prepare(scenario: Scenario) -> _Prepared:
+    """Build road, model and inputs, and place the car; nothing is stepped yet."""
+    vehicle = load_vehicle(overrides=scenario.vehicle or None)
+    road, half_width = _road_for(scenario)
+    loads = tuple((ld.mass_kg, tuple(ld.position_m)) for ld in scenario.load)
+    vm = build_model(
+        vehicle,
+        road,
+        contact=scenario.contact,
+        timestep=scenario.timestep_s,
+        loads=loads,
+        half_width=half_width,
+    )
+    model = vm.model
+    data = mujoco.MjData(model)
+    t = np.arange(scenario.n_steps) * scenario.timestep_s
+    pressure = np.ascontiguousarray(scenario.pressure_schedule(t))
+    speed_ref = np.ascontiguousarray(scenario.speed_profile(t))
+    steer_cmd = np.ascontiguousarray(scenario.steer_series(t))
+    mode = np.zeros(6)
+    x0 = START_MARGIN_M + vehicle.chassis.a2
+    y0 = scenario.steering.lane_y_m
+    if scenario.steering.mode == "lane":
+        mode[:2] = MODE_LANE, y0
+    elif scenario.steering.mode == "circle":
+        sign = 1.0 if scenario.steering.direction == "left" else -1.0
+        x0 = 0.0
+        mode[:5] = MODE_CIRCLE, x0, y0 + sign * scenario.steering.radius_m, scenario.steering.radius_m, sign
+    else:
+        mode[0] = MODE_OPEN_LOOP
+    hdata = model.hfield_data.reshape(int(vm.hfield[4]), int(vm.hfield[5]))
+    # initial pose: level, at the static height over the mean road under the wheels
+    corner = vehicle.corner_xy
+    road_under = np.mean([road_height(x0 + cx, y0 + cy, vm.hfield, hdata) for cx, cy in corner])
+    cq = vm.ids["chassis_qpos"][0]
+    cd = vm.ids["chassis_dof"][0]
+    data.qpos[cq : cq + 3] = x0, y0, vehicle.chassis.cog_height + road_under
+    data.qpos[cq + 3 : cq + 7] = 1.0, 0.0, 0.0, 0.0
+    v0 = speed_ref[0]
+    data.qvel[cd] = v0
+    tp = vm.tire.to_array()
+    for i in range(4):
+        fz = vehicle.static_tire_load[i]
+        data.qvel[vm.ids["spin_dof"][i]] = v0 / effective_rolling_radius(fz, pressure[0, i], tp)
+    if scenario.contact == "native":  # the ring starts at its static deflection, touching the road
+        for i in range(4):
+            kt = vertical_stiffness(pressure[0, i], tp)
+            data.qpos[vm.ids["ring_qpos"][i]] = vehicle.static_tire_load[i] / kt
+    mujoco.mj_forward(model, data)
+    inputs = {
+        "pressure": pressure,
+        "speed_ref": speed_ref,
+        "steer_cmd": steer_cmd,
+        "mode": mode,
+        "tp": tp,
+        "vp": pack_vehicle(vm),
+        "ids": pack_ids(vm.ids),
+        "hdata": hdata,
+    }
+    return _Prepared(vm=vm, data=data, road=road, inputs=inputs)
+
+
+def simulate(scenario: Scenario, *, progress: bool = False) -> SimResult:
+    """Run `scenario` and return its table and metadata.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    progress : bool, optional
+        Show a progress bar (stderr).
+
+    Raises
+    ------
+    InputError
+        If the scenario cannot be run (e.g. its road is too short).
+    SimulationError
+        If the state diverges.
+    """
+    prep = prepare(scenario)
+    vm, data, inp = prep.vm, prep.data, prep.inputs
+    model = vm.model
+    n = scenario.n_steps
+    dt = scenario.timestep_s
+    log = np.zeros((n, len(LOG_COLUMNS)))
+    state = np.zeros(N_STATE)
+    qpos, qvel, xpos, xmat = data.qpos, data.qvel, data.xpos, data.xmat
+    sensordata, qfrc, xfrc, ctrl = data.sensordata, data.qfrc_applied, data.xfrc_applied, data.ctrl
+    ids, hf, hdata, vp, tp = inp["ids"], vm.hfield, inp["hdata"], inp["vp"], inp["tp"]
+    pressure, speed_ref, steer_cmd, mode = inp["pressure"], inp["speed_ref"], inp["steer_cmd"], inp["mode"]
+    from mjcf.kernel import step_kernel
+
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=n, unit="step", unit_scale=True, desc="simulate", leave=False)
+    chunk = 2000
+    started = time.perf_counter()
+    step1, step2 = mujoco.mj_step1, mujoco.mj_step2
+    for start in range(0, n, chunk):
+        for k in range(start, min(start + chunk, n)):
+            step1(model, data)
+            step_kernel(
+                k, dt, qpos, qvel, xpos, xmat, sensordata, qfrc, xfrc, ctrl,
+                ids, hf, hdata, vp, tp, pressure, speed_ref, steer_cmd, mode, state, log,
+            )  # fmt: skip
+            step2(model, data)
+        unstable = data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number > 0
+        if unstable or not (np.all(np.isfinite(qpos)) and np.all(np.isfinite(qvel))):
+            raise SimulationError(f"simulation diverged before t = {(k + 1) * dt:.3f} s (MuJoCo: bad qacc)")
+        if bar is not None:
+            bar.update(min(chunk, n - start))
+    finish_log(n - 1, sensordata, ids, state, log)
+    wall = time.perf_counter() - started
+    if bar is not None:
+        bar.close()
+    table = _output_table(log[:: scenario.decimation], scenario)
+    meta = {
+        "scenario": scenario.model_dump(mode="json"),
+        "road_seed": scenario.road_seed(),
+        "noise_seed": scenario.noise_seed(),
+        "contact": scenario.contact,
+        "versions": _versions(),
+        "wall_time_s": wall,
+        "total_mass_kg": float(np.sum(model.body_mass)),
+    }
+    return SimResult(table=table, scenario=scenario, metadata=meta)
+
+
+def _output_table(log: np.ndarray, scenario: Scenario) -> pd.DataFrame:
+    raw = dict(zip(LOG_COLUMNS, log.T, strict=True))
+    rng = np.random.default_rng(scenario.noise_seed())
+    out = {}
+    for name in GLOBAL_FIELDS:
+        out[name] = raw[name]
+    n = log.shape[0]
+    noise_s = rng.standard_normal((4, n)) * scenario.noise.accel_sprung_mps2
+    noise_u = rng.standard_normal((4, n)) * scenario.noise.accel_unsprung_mps2
+    for i, c in enumerate(CORNERS):
+        out[f"{c}_accel_sprung_mps2"] = raw[f"{c}_accel_sprung_true_mps2"] + noise_s[i]
+        out[f"{c}_accel_unsprung_mps2"] = raw[f"{c}_accel_unsprung_true_mps2"] + noise_u[i]
+        for field in CORNER_FIELDS:
+            if field == "pressure_pa":
+                out[f"{c}_pressure_kpa"] = raw[f"{c}_pressure_pa"] / 1e3
+            else:
+                out[f"{c}_{field}"] = raw[f"{c}_{field}"]
+    return pd.DataFrame({name: out[name] for name in OUTPUT_COLUMNS})
+
+
+def _versions() -> dict[str, str]:
+    out = {}
+    for name in ("suvtwin", "mujoco", "numpy", "numba", "scipy", "pyarrow"):
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            out[name] = "unknown"
+    return out
+
+
+def write_run(result: SimResult, path: str | Path) -> None:
+    """Write a run to Parquet: the table, with scenario and versions in the metadata.
+
+    Atomic (no partial file on failure). The wall time is not stored, so the same
+    scenario and seed give the same bytes.
+    """
+    meta = {k: v for k, v in result.metadata.items() if k != "wall_time_s"}
+    table = pa.Table.from_pandas(result.table, preserve_index=False)
+    table = table.replace_schema_metadata({_METADATA_KEY: json.dumps(meta, sort_keys=True).encode()})
+    atomic_write(path, lambda tmp: pq.write_table(table, tmp, compression="zstd"))
+
+
+def read_run(path: str | Path) -> tuple[pd.DataFrame, dict]:
+    """Read a run's table and metadata (empty dict if the file carries none)."""
+    table = read_parquet_table(path, what="run file")
+    raw = (table.schema.metadata or {}).get(_METADATA_KEY)
+    return table.to_pandas(), (json.loads(raw) if raw else {})
