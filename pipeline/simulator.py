@@ -28,7 +28,6 @@ import numpy as np
 import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
-from mjcf.tire import effective_rolling_radius, vertical_stiffness
 
 from mjcf.builder import HALF_WIDTH_Y, VehicleModel, build_model
 from mjcf.kernel import (
@@ -44,6 +43,7 @@ from mjcf.kernel import (
     pack_vehicle,
     road_height,
 )
+from mjcf.tire import effective_rolling_radius, vertical_stiffness
 from mjcf.vehicle import CORNERS, load_vehicle
 from pipeline.errors import InputError, RunError
 from pipeline.files import atomic_write, read_parquet_table

@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 import scipy.signal
 import scipy.stats
-from mjcf.tire import TireParams
 
 from mjcf.builder import build_model, flat_road_xml
 from mjcf.kernel import road_height
+from mjcf.tire import TireParams
 from mjcf.vehicle import CORNERS, GRAVITY, load_vehicle, parameter_table
 from pipeline.road_spec import RoadSpec, SegmentSpec
 from pipeline.roads import generate_road
