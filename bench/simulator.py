@@ -4,9 +4,11 @@ Run: ``python bench/simulator.py`` — prints one JSON object:
 
 - ``realtime_factor``: simulated / wall time of a 10 s class C run at 60 km/h,
   1 ms steps, one core (envelope contact, compiled kernel, Python step loop);
-- ``baseline_realtime_factor``: the same multibody with MuJoCo's native sphere
-  contact on a flat plane, linear joint springs/dampers in place of the kernel, and
-  no Python callback (``mujoco.rollout``); ``ratio`` = ours / baseline. Targets
+- ``baseline_realtime_factor``: the same multibody (its native-contact variant, with
+  the tyre-belt slides) with MuJoCo's own sphere contact on a flat plane, linear joint
+  springs/dampers in place of the kernel, and no Python callback
+  (``mujoco.rollout``); ``baseline_contacts`` checks it really rolls on its four
+  spheres; ``ratio`` = ours / baseline. Targets
   (issue 3): ≥ 60× real time and ratio ≥ 0.8;
 - ``timestep_sensitivity``: hub (unsprung) and body (sprung) acceleration RMS at
   the front-left corner for 1, 0.5 and 0.25 ms steps on the same road, and their
@@ -25,6 +27,7 @@ import numpy as np
 from mujoco import rollout
 
 from mjcf.builder import flat_road_xml
+from mjcf.tire import TireParams
 from mjcf.vehicle import load_vehicle
 from pipeline.scenario import parse_scenario
 from pipeline.simulator import simulate
@@ -44,9 +47,10 @@ def _scenario(timestep: float) -> object:
 
 
 def _baseline_model() -> mujoco.MjModel:
-    """The SUV multibody on a plane with MuJoCo's own sphere contact and joint springs."""
-    vehicle = load_vehicle()
-    xml = flat_road_xml(vehicle)
+    """The SUV multibody (native-contact variant) on a plane, MuJoCo's own sphere contact with
+    friction, and linear joint springs/dampers in place of the kernel's suspension and tyre laws."""
+    vehicle, tire = load_vehicle(), TireParams()
+    xml = flat_road_xml(vehicle, tire, contact="native")
     start = xml.index('<geom name="road"')
     end = xml.index("/>", start) + 2
     xml = (
@@ -54,30 +58,42 @@ def _baseline_model() -> mujoco.MjModel:
         + '<geom name="road" type="plane" size="500 500 0.1" contype="1" conaffinity="1"/>'
         + xml[end:]
     )
-    xml = xml.replace('contype="0" conaffinity="0" group="3"', 'contype="1" conaffinity="1" group="3"')
-    k_front, k_rear = vehicle.suspension.spring_rate_front, vehicle.suspension.spring_rate_rear
-    c = 0.5 * (vehicle.suspension.damper_compression_low + vehicle.suspension.damper_rebound_low)
-    for corner, k in (("fl", k_front), ("fr", k_front), ("rl", k_rear), ("rr", k_rear)):
+    xml = xml.replace('condim="1"', 'condim="3"')
+    s = vehicle.suspension
+    c = 0.5 * (s.damper_compression_low + s.damper_rebound_low)
+    preload = vehicle.sprung_mass_corner * 9.81
+    for i, corner in enumerate(("fl", "fr", "rl", "rr")):
+        k = vehicle.spring_rate[i]
         xml = xml.replace(
             f'<joint name="susp_{corner}" type="slide"',
-            f'<joint name="susp_{corner}" type="slide" stiffness="{k}" damping="{c}" springref="0.1"',
+            f'<joint name="susp_{corner}" type="slide" stiffness="{k}" damping="{c}" '
+            f'springref="{-preload[i] / k}"',
+        )
+        xml = xml.replace(
+            f'<joint name="tire_{corner}" type="slide"',
+            f'<joint name="tire_{corner}" type="slide" stiffness="{tire.vertical_stiffness_nominal}" '
+            f'damping="{tire.vertical_damping}"',
         )
     return mujoco.MjModel.from_xml_string(xml)
 
 
-def _baseline_factor(duration: float = 10.0) -> float:
+def _baseline_factor(duration: float = 10.0) -> tuple[float, int, float]:
     model = _baseline_model()
     model.opt.timestep = 1e-3
     data = mujoco.MjData(model)
-    data.qpos[2] = 0.62
+    data.qpos[2] = load_vehicle().chassis.cog_height
     data.qvel[0] = 60 / 3.6
+    mujoco.mj_forward(model, data)
     n = int(duration / model.opt.timestep)
     state = np.zeros(mujoco.mj_stateSize(model, mujoco.mjtState.mjSTATE_FULLPHYSICS))
     mujoco.mj_getState(model, data, state, mujoco.mjtState.mjSTATE_FULLPHYSICS)
     rollout.rollout(model, data, state, nstep=100)  # warm-up
     start = time.perf_counter()
     rollout.rollout(model, data, state, nstep=n)
-    return duration / (time.perf_counter() - start)
+    wall = time.perf_counter() - start
+    mujoco.mj_setState(model, data, state, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+    mujoco.mj_step(model, data, nstep=n)
+    return duration / wall, int(data.ncon), float(data.qpos[2])
 
 
 def main() -> dict:
@@ -86,7 +102,7 @@ def main() -> dict:
     for _ in range(3):
         walls.append(simulate(_scenario(1e-3)).metadata["wall_time_s"])
     factor = 10.0 / float(np.median(walls))
-    baseline = _baseline_factor()
+    baseline, contacts, height = _baseline_factor()
     sensitivity = {}
     for dt in (1e-3, 5e-4, 2.5e-4):
         table = simulate(_scenario(dt)).table
@@ -104,6 +120,8 @@ def main() -> dict:
         "wall_time_s": walls,
         "realtime_factor": factor,
         "baseline_realtime_factor": baseline,
+        "baseline_contacts": contacts,
+        "baseline_chassis_height_m": height,
         "ratio": factor / baseline,
         "timestep_sensitivity": sensitivity,
         "python": platform.python_version(),

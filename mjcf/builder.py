@@ -394,8 +394,10 @@ def build_model(
     )
 
 
-def flat_road_xml(vehicle: VehicleParams | None = None, tire: TireParams | None = None) -> str:
-    """MJCF of the SUV on a flat 200 m road: the content of ``mjcf/suv/suv.xml``."""
+def flat_road_xml(
+    vehicle: VehicleParams | None = None, tire: TireParams | None = None, *, contact: str = "envelope"
+) -> str:
+    """MJCF of the SUV on a flat 200 m road (``contact="envelope"``: ``mjcf/suv/suv.xml``)."""
     from mjcf.vehicle import load_vehicle
 
     return vehicle_xml(
@@ -404,6 +406,7 @@ def flat_road_xml(vehicle: VehicleParams | None = None, tire: TireParams | None 
         hfield_shape=(3, 3),
         hfield_size=(100.0, 5.0, 0.001, 0.5),
         hfield_pos=(80.0, 0.0, 0.0),
+        contact=contact,
     )
 
 
