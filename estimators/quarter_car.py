@@ -1,0 +1,151 @@
+r"""The 2-DOF non-linear quarter car of paper 000, as the estimators' process model.
+
+Usual call: ``acc_s, acc_us = accelerations(x, z_road, qc)`` with
+``x = [z_s, z_us, v_s, v_us, k_t]`` over any leading batch shape.
+
+Brancati & Tufano 2022:
+
+- eq. 1: :math:`m_s\ddot z_s = -F`, :math:`m_{us}\ddot z_{us} = F - k_t(z_{us} - z_r)`, with the
+  suspension force
+  :math:`F = k_s d + k_{snl} d^3 + c_s \dot d + c_{snl}\,g(\dot d)`, :math:`d = z_s - z_{us}`.
+  The paper writes the damper term as :math:`c_{snl}\dot d^2`, which never changes
+  sign (a damper that pushes the same way in bump and rebound); the default here is
+  the sign-preserving :math:`g(\dot d) = |\dot d|\dot d` (``damper_law="signed"``), the
+  literal form is ``damper_law="paper"``. A result says which it used.
+- eq. 2: corner sprung mass :math:`m_s = \tfrac12 m_{s,vehicle}\,a_2/l` (front).
+- eq. 3–4: :math:`k_t = k_{t0}(1 + p_{Fz1}\,dp_i)`, :math:`dp_i = (p - p_0)/p_0`, and inverse.
+- eq. 15: forward-Euler discretization with :math:`k_t` a random walk.
+- eq. 16 (paper 003): the measurement is the pair of accelerations of eq. 1.
+- eq. 18: :math:`Q = \mathrm{diag}(q_i \Delta t^3)`.
+- eq. 19: the paper writes :math:`R = \mathrm{diag}(\sigma_{a z_s}, \sigma_{a z_{us}})` with the
+  *standard deviations* on the diagonal; a covariance needs the variances, which is
+  what :func:`measurement_noise` returns (the paper's form is ``literal=True``).
+
+No MuJoCo here: estimators consume arrays.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+import numpy.typing as npt
+
+__all__ = [
+    "IX_KT",
+    "IX_VS",
+    "IX_VUS",
+    "IX_ZS",
+    "IX_ZUS",
+    "QuarterCar",
+    "accelerations",
+    "measurement_noise",
+    "pressure_from_stiffness",
+    "process_euler",
+    "process_noise",
+    "sprung_mass_share",
+    "stiffness_from_pressure",
+]
+
+IX_ZS, IX_ZUS, IX_VS, IX_VUS, IX_KT = 0, 1, 2, 3, 4
+
+KT0 = 264700.0  # N/m, paper 000 Table 1
+P0 = 250e3  # Pa, paper 000 Table 1
+PFZ1 = 0.7097  # MF-Tyre 6.1 PFZ1 (paper 000 eq. 3)
+
+
+@dataclass(frozen=True)
+class QuarterCar:
+    """Quarter-car parameters, SI units. Fields broadcast: give arrays of shape (S,) for S modes.
+
+    Attributes
+    ----------
+    sprung_mass : kg (eq. 2)
+    unsprung_mass : kg
+    spring_rate : N/m, :math:`k_s`
+    spring_cubic : N/m³, :math:`k_{snl}`
+    damping : N s/m, :math:`c_s`
+    damping_nonlinear : N s²/m², :math:`c_{snl}`
+    damper_law : "signed" (|v|·v, default) or "paper" (v², eq. 1 as printed)
+    """
+
+    sprung_mass: npt.ArrayLike
+    unsprung_mass: npt.ArrayLike
+    spring_rate: npt.ArrayLike
+    spring_cubic: npt.ArrayLike
+    damping: npt.ArrayLike
+    damping_nonlinear: npt.ArrayLike
+    damper_law: Literal["signed", "paper"] = "signed"
+
+
+def sprung_mass_share(
+    chassis_mass: float, *, a_opposite: float, wheelbase: float, load: float = 0.0
+) -> float:
+    """Sprung mass of one corner, kg: ½·(m_chassis + m_load)·a_opposite/l (paper 000 eq. 2).
+
+    For a front corner `a_opposite` is a2 (CoG to rear axle); for a rear corner a1.
+    """
+    return 0.5 * (chassis_mass + load) * a_opposite / wheelbase
+
+
+def stiffness_from_pressure(pressure: npt.ArrayLike, *, kt0: float = KT0, p0: float = P0, pfz1: float = PFZ1):
+    """Tire vertical stiffness at inflation pressure `pressure` (Pa), N/m (paper 000 eq. 3–4)."""
+    return kt0 * (1.0 + pfz1 * (np.asarray(pressure, dtype=float) - p0) / p0)
+
+
+def pressure_from_stiffness(kt: npt.ArrayLike, *, kt0: float = KT0, p0: float = P0, pfz1: float = PFZ1):
+    """Inflation pressure for tire stiffness `kt` (N/m), Pa (inverse of eq. 3–4)."""
+    return p0 * (1.0 + (np.asarray(kt, dtype=float) / kt0 - 1.0) / pfz1)
+
+
+def _suspension_force(d, v, qc: QuarterCar):
+    nonlinear = np.abs(v) * v if qc.damper_law == "signed" else v * v
+    return qc.spring_rate * d + qc.spring_cubic * d**3 + qc.damping * v + qc.damping_nonlinear * nonlinear
+
+
+def accelerations(x: np.ndarray, z_road: npt.ArrayLike, qc: QuarterCar) -> tuple[np.ndarray, np.ndarray]:
+    """Sprung and unsprung vertical accelerations, m/s² (paper 000 eq. 1; paper 003 eq. 16).
+
+    Parameters
+    ----------
+    x : numpy.ndarray, shape (..., 5)
+        ``[z_s, z_us, v_s, v_us, k_t]`` in m, m, m/s, m/s, N/m (deviations from static).
+    z_road : array_like, broadcast to x[..., 0]
+        Road elevation under the tire, m.
+    qc : QuarterCar
+        Parameters broadcast against ``x[..., 0]``.
+    """
+    d = x[..., IX_ZS] - x[..., IX_ZUS]
+    v = x[..., IX_VS] - x[..., IX_VUS]
+    force = _suspension_force(d, v, qc)
+    acc_s = -force / qc.sprung_mass
+    acc_us = (force - x[..., IX_KT] * (x[..., IX_ZUS] - z_road)) / qc.unsprung_mass
+    return acc_s, acc_us
+
+
+def process_euler(x: np.ndarray, z_road: npt.ArrayLike, qc: QuarterCar, dt: float) -> np.ndarray:
+    """One forward-Euler step of eq. 15, x of shape (..., 5); k_t is carried unchanged (random walk mean)."""
+    acc_s, acc_us = accelerations(x, z_road, qc)
+    out = x.copy()
+    out[..., IX_ZS] += x[..., IX_VS] * dt
+    out[..., IX_ZUS] += x[..., IX_VUS] * dt
+    out[..., IX_VS] += acc_s * dt
+    out[..., IX_VUS] += acc_us * dt
+    return out
+
+
+def process_noise(q: npt.ArrayLike, dt: float) -> np.ndarray:
+    """Q = diag(q_i·Δt³) (paper 000 eq. 18), shape (len(q), len(q))."""
+    return np.diag(np.asarray(q, dtype=float) * dt**3)
+
+
+def measurement_noise(sigma_sprung: float, sigma_unsprung: float, *, literal: bool = False) -> np.ndarray:
+    """Measurement covariance R of the two accelerometers, (m/s²)².
+
+    Variances on the diagonal; ``literal=True`` returns the paper's eq. 19 as printed
+    (standard deviations on the diagonal), for reproducing the paper.
+    """
+    if literal:
+        return np.diag([sigma_sprung, sigma_unsprung])
+    return np.diag([sigma_sprung**2, sigma_unsprung**2])
