@@ -44,6 +44,8 @@ __all__ = [
     "pressure_from_stiffness",
     "process_euler",
     "process_noise",
+    "process_semi_implicit",
+    "simulate_quarter_car",
     "sprung_mass_share",
     "stiffness_from_pressure",
 ]
@@ -135,6 +137,19 @@ def process_euler(x: np.ndarray, z_road: npt.ArrayLike, qc: QuarterCar, dt: floa
     return out
 
 
+def process_semi_implicit(x: np.ndarray, z_road: npt.ArrayLike, qc: QuarterCar, dt: float) -> np.ndarray:
+    """One semi-implicit (symplectic) Euler step: velocities from eq. 1, then positions with the
+    new velocities. Same cost as eq. 15, but energy-preserving: forward Euler inflates the
+    ~10 Hz wheel-hop oscillation by ~0.2 % per 1 ms step, which biases k_t low."""
+    acc_s, acc_us = accelerations(x, z_road, qc)
+    out = x.copy()
+    out[..., IX_VS] += acc_s * dt
+    out[..., IX_VUS] += acc_us * dt
+    out[..., IX_ZS] += out[..., IX_VS] * dt
+    out[..., IX_ZUS] += out[..., IX_VUS] * dt
+    return out
+
+
 def process_noise(q: npt.ArrayLike, dt: float) -> np.ndarray:
     """Q = diag(q_i·Δt³) (paper 000 eq. 18), shape (len(q), len(q))."""
     return np.diag(np.asarray(q, dtype=float) * dt**3)
@@ -149,3 +164,57 @@ def measurement_noise(sigma_sprung: float, sigma_unsprung: float, *, literal: bo
     if literal:
         return np.diag([sigma_sprung, sigma_unsprung])
     return np.diag([sigma_sprung**2, sigma_unsprung**2])
+
+
+def simulate_quarter_car(
+    x0: np.ndarray, z_road: np.ndarray, qc: QuarterCar, dt: float, *, substeps: int = 10
+) -> tuple[np.ndarray, np.ndarray]:
+    """Integrate eq. 1 finely (RK4, `substeps` per sample, road linear in between): truth for tests.
+
+    Parameters
+    ----------
+    x0 : numpy.ndarray, shape (..., 5)
+        Initial state; k_t (last entry) is held constant.
+    z_road : numpy.ndarray, shape (..., T)
+        Road elevation at the sample times, m.
+    dt : float
+        Sample interval, s.
+
+    Returns
+    -------
+    states : numpy.ndarray, shape (..., T, 5)
+        State at each sample time.
+    acc : numpy.ndarray, shape (..., T, 2)
+        Sprung and unsprung acceleration at each sample time, m/s².
+    """
+    h = dt / substeps
+    x = np.array(x0, dtype=float)
+    n = z_road.shape[-1]
+    states = np.empty(x.shape[:-1] + (n, 5))
+    acc = np.empty(x.shape[:-1] + (n, 2))
+
+    def deriv(state, road):
+        a_s, a_us = accelerations(state, road, qc)
+        out = np.zeros_like(state)
+        out[..., IX_ZS] = state[..., IX_VS]
+        out[..., IX_ZUS] = state[..., IX_VUS]
+        out[..., IX_VS] = a_s
+        out[..., IX_VUS] = a_us
+        return out
+
+    for k in range(n):
+        states[..., k, :] = x
+        acc[..., k, 0], acc[..., k, 1] = accelerations(x, z_road[..., k], qc)
+        if k == n - 1:
+            break
+        r0, r1 = z_road[..., k], z_road[..., k + 1]
+        for j in range(substeps):
+            ra = r0 + (r1 - r0) * j / substeps
+            rm = r0 + (r1 - r0) * (j + 0.5) / substeps
+            rb = r0 + (r1 - r0) * (j + 1) / substeps
+            k1 = deriv(x, ra)
+            k2 = deriv(x + 0.5 * h * k1, rm)
+            k3 = deriv(x + 0.5 * h * k2, rm)
+            k4 = deriv(x + h * k3, rb)
+            x = x + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+    return states, acc
