@@ -351,6 +351,67 @@ def render_command(
     typer.echo(f"wrote {out} ({frames} frames at {fps} fps)")
 
 
+class EstimatorName(StrEnum):
+    imm = "imm"
+    ukf = "ukf"
+
+
+class RoadInput(StrEnum):
+    synthetic = "synthetic"
+    augmented = "augmented"
+
+
+@app.command("estimate")
+def estimate_command(
+    run: Annotated[
+        Path, typer.Argument(help="Run file (suvtwin simulate) or any Parquet with the same columns.")
+    ],
+    out: Annotated[
+        Path, typer.Option("--out", help="Output Parquet: t_s, pressure_hat_kpa, pressure_sigma_kpa, ...")
+    ],
+    corner: Annotated[str, typer.Option(help="Corner to estimate: fl, fr, rl or rr.")] = "fl",
+    estimator: Annotated[
+        EstimatorName,
+        typer.Option(help="imm: paper 000's IMM of 4 UKFs (classes A-D); ukf: its single UKF (A)."),
+    ] = EstimatorName.imm,
+    params: Annotated[str, typer.Option(help="Mode parameters: 'paper' (Table 3) or a JSON file.")] = "paper",
+    road_input: Annotated[
+        RoadInput,
+        typer.Option(help="What each mode assumes for the road: the paper's synthetic road or a road state."),
+    ] = RoadInput.synthetic,
+    seed: Annotated[int, typer.Option(help="Seed of the synthetic roads (≥ 0).")] = 0,
+) -> None:
+    """Estimate one tire's inflation pressure from its corner's two accelerometers."""
+    from pipeline.estimation import estimate_run, write_estimate
+
+    _check_out(out, "--out", (".parquet",))
+    if seed < 0:
+        raise InputError(f"--seed must be ≥ 0, got {seed}")
+    result = estimate_run(run, corner=corner, estimator=estimator.value, params=params,
+                          road_input=road_input.value, seed=seed)  # fmt: skip
+    write_estimate(result, out)
+    typer.echo(
+        f"wrote {out} ({len(result.table)} samples, corner {corner}, {estimator.value}, {road_input.value})"
+    )
+
+
+@app.command("score")
+def score_command(
+    estimate: Annotated[Path, typer.Argument(help="Estimate file (suvtwin estimate).")],
+    run: Annotated[Path, typer.Argument(help="The run file it was made from (holds the true pressure).")],
+    as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")] = False,
+) -> None:
+    """Score an estimate against the run's true pressure (kPa): convergence, error, sigma coverage."""
+    from pipeline.estimation import score_estimate
+
+    metrics = score_estimate(estimate, run)
+    if as_json:
+        typer.echo(json.dumps(metrics, indent=2))
+        return
+    for key, value in metrics.items():
+        typer.echo(f"{key:<28} {value:.4g}" if isinstance(value, float) else f"{key:<28} {value}")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI with `argv` (default: ``sys.argv[1:]``); return the exit status.
 

@@ -1,0 +1,177 @@
+"""Running the estimators on a run file and scoring them: the glue between files and estimators.
+
+Usual call: ``result = estimate_run("run.parquet", corner="fl", estimator="imm", params="paper",
+road_input="synthetic", seed=0)``; ``metrics = score_estimate("est.parquet", "run.parquet")``.
+
+A run file is the simulator's Parquet or any Parquet with ``t_s`` (uniform, increasing),
+``speed_mps`` and the corner's ``{c}_accel_sprung_mps2`` / ``{c}_accel_unsprung_mps2``.
+The corner's sprung mass is paper 000's eq. 2 with the run's extra load (from its
+metadata, if any); unsprung mass and the p0/kt0 law are the SUV's.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from estimators.quarter_car import pressure_from_stiffness, sprung_mass_share
+from estimators.tire_pressure import estimate_pressure, load_modes
+from mjcf.vehicle import CORNERS, load_vehicle
+from pipeline.errors import InputError
+from pipeline.files import atomic_write, read_parquet_table
+from pipeline.scoring import run_metrics
+
+__all__ = ["EstimateRun", "estimate_run", "score_estimate", "write_estimate"]
+
+_METADATA_KEY = b"suvtwin.estimate"
+PRESSURE_TOLERANCE_KPA = 12.5
+"""Convergence band: 5 % of p0 = 250 kPa."""
+
+
+@dataclass(frozen=True)
+class EstimateRun:
+    """An estimate's table (t_s, pressure_hat_kpa, ...) and what made it."""
+
+    table: pd.DataFrame
+    metadata: dict
+
+
+def _load_run(path: str | Path, corner: str) -> tuple[pd.DataFrame, dict, float]:
+    if corner not in CORNERS:
+        raise InputError(f"--corner must be one of fl, fr, rl, rr, got {corner!r}")
+    table = read_parquet_table(path, what="run file")
+    needed = ["t_s", "speed_mps", f"{corner}_accel_sprung_mps2", f"{corner}_accel_unsprung_mps2"]
+    missing = [c for c in needed if c not in table.column_names]
+    if missing:
+        raise InputError(f"run file {str(path)!r} lacks column(s) {', '.join(missing)}")
+    frame = table.select(
+        needed + [c for c in (f"{corner}_pressure_kpa",) if c in table.column_names]
+    ).to_pandas()
+    values = frame[needed].to_numpy(dtype=float)
+    if not np.all(np.isfinite(values)):
+        bad = [c for c in needed if not np.all(np.isfinite(frame[c].to_numpy(dtype=float)))]
+        raise InputError(f"run file {str(path)!r}: column(s) {', '.join(bad)} hold NaN or infinite values")
+    t = frame["t_s"].to_numpy(dtype=float)
+    if t.size < 10:
+        raise InputError(f"run file {str(path)!r}: needs at least 10 samples, got {t.size}")
+    step = np.diff(t)
+    if np.any(step <= 0):
+        raise InputError(f"run file {str(path)!r}: t_s must be strictly increasing")
+    if np.ptp(step) > 1e-6 * np.mean(step) + 1e-12:
+        raise InputError(f"run file {str(path)!r}: t_s must be uniformly sampled")
+    raw = (table.schema.metadata or {}).get(b"suvtwin.run")
+    meta = json.loads(raw) if raw else {}
+    return frame, meta, float(np.mean(step))
+
+
+def estimate_run(
+    path: str | Path, *, corner: str, estimator: str, params: str, road_input: str, seed: int
+) -> EstimateRun:
+    """Run paper 000's IMM (``estimator="imm"``) or single UKF (``"ukf"``) on one corner of a run."""
+    frame, meta, dt = _load_run(path, corner)
+    vehicle = load_vehicle()
+    scenario = meta.get("scenario", {})
+    load = sum(item.get("mass_kg", 0.0) for item in scenario.get("load", []))
+    front = corner.startswith("f")
+    ms = sprung_mass_share(
+        vehicle.chassis.mass,
+        a_opposite=vehicle.chassis.a2 if front else vehicle.chassis.a1,
+        wheelbase=vehicle.wheelbase,
+        load=load,
+    )
+    mus = vehicle.unsprung_mass[CORNERS.index(corner)]
+    modes = load_modes(params)
+    if estimator == "ukf":
+        if "A" not in modes.classes:
+            raise InputError("--estimator ukf uses the class A mode, which the parameter file lacks")
+        modes = modes.subset(("A",))
+    elif estimator != "imm":
+        raise InputError(f"--estimator must be imm or ukf, got {estimator!r}")
+    est = estimate_pressure(
+        frame[f"{corner}_accel_sprung_mps2"].to_numpy(),
+        frame[f"{corner}_accel_unsprung_mps2"].to_numpy(),
+        dt,
+        modes=modes,
+        sprung_mass=ms,
+        unsprung_mass=mus,
+        road_input=road_input,
+        speed_mps=max(float(frame["speed_mps"].mean()), 1.0),
+        seed=seed,
+    )
+    columns = {
+        "t_s": frame["t_s"].to_numpy(),
+        "pressure_hat_kpa": est.pressure_pa[0] / 1e3,
+        "pressure_sigma_kpa": est.pressure_sigma_pa[0] / 1e3,
+        "tire_stiffness_hat_npm": est.stiffness[0],
+        "tire_stiffness_sigma_npm": est.stiffness_sigma[0],
+    }
+    if est.mode_probability is not None:
+        for s, letter in enumerate(est.classes):
+            columns[f"mode_prob_{letter}"] = est.mode_probability[0, :, s]
+    for s, letter in enumerate(est.classes):
+        columns[f"mode_pressure_{letter}_kpa"] = pressure_from_stiffness(est.mode_stiffness[0, :, s]) / 1e3
+    metadata = {
+        "run_file": str(path),
+        "corner": corner,
+        "estimator": estimator,
+        "road_input": road_input,
+        "seed": seed,
+        "sprung_mass_kg": ms,
+        "unsprung_mass_kg": float(mus),
+        "covariance_repairs": int(est.repairs.sum()),
+        **est.info,
+    }
+    return EstimateRun(table=pd.DataFrame(columns), metadata=metadata)
+
+
+def write_estimate(result: EstimateRun, path: str | Path) -> None:
+    """Write an estimate to Parquet (atomically), what made it in the metadata."""
+    table = pa.Table.from_pandas(result.table, preserve_index=False)
+    table = table.replace_schema_metadata(
+        {_METADATA_KEY: json.dumps(result.metadata, sort_keys=True).encode()}
+    )
+    atomic_write(path, lambda tmp: pq.write_table(table, tmp, compression="zstd"))
+
+
+def score_estimate(estimate_path: str | Path, run_path: str | Path) -> dict:
+    """Metrics of an estimate file against its run's true pressure (kPa, s)."""
+    est = read_parquet_table(estimate_path, what="estimate file")
+    raw = (est.schema.metadata or {}).get(_METADATA_KEY)
+    if raw is None:
+        raise InputError(f"estimate file {str(estimate_path)!r} was not written by 'suvtwin estimate'")
+    meta = json.loads(raw)
+    corner = meta["corner"]
+    frame, _, _ = _load_run(run_path, corner)
+    truth_col = f"{corner}_pressure_kpa"
+    if truth_col not in frame:
+        raise InputError(f"run file {str(run_path)!r} lacks {truth_col}: no true pressure to score against")
+    table = est.to_pandas()
+    if len(table) != len(frame) or not np.allclose(table["t_s"], frame["t_s"]):
+        raise InputError(
+            "estimate and run files have different time axes: was the estimate made from this run?"
+        )
+    m = run_metrics(
+        table["t_s"].to_numpy(),
+        frame[truth_col].to_numpy(),
+        table["pressure_hat_kpa"].to_numpy(),
+        table["pressure_sigma_kpa"].to_numpy(),
+        tolerance=PRESSURE_TOLERANCE_KPA,
+    )
+    return {
+        "corner": corner,
+        "estimator": meta["estimator"],
+        "road_input": meta["road_input"],
+        "true_pressure_end_kpa": float(frame[truth_col].iloc[-1]),
+        "estimate_end_kpa": float(table["pressure_hat_kpa"].iloc[-1]),
+        "time_to_converge_s": m.time_to_converge_s,
+        "mean_error_kpa": m.mean_error,
+        "rmse_kpa": m.rmse,
+        "inside_1sigma": m.inside_1sigma,
+        "inside_2sigma": m.inside_2sigma,
+    }
