@@ -92,7 +92,9 @@ def imm_probabilities(cbar: np.ndarray, log_likelihood: np.ndarray, *, floor: fl
 def imm_combine(x: np.ndarray, P: np.ndarray, mu: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     r"""Combined estimate :math:`\hat x = \sum_j \mu_j x^j`,
     :math:`\hat P = \sum_j \mu_j (P^j + (x^j - \hat x)(\cdot)^T)` (eq. 13–14)."""
-    x_hat = np.einsum("...j,...jn->...n", mu, x)
+    x_hat = (mu[..., None, :] @ x)[..., 0, :]
+    n = x.shape[-1]
     d = x - x_hat[..., None, :]
-    P_hat = np.einsum("...j,...jnm->...nm", mu, P) + np.einsum("...j,...jn,...jm->...nm", mu, d, d)
+    P_hat = (mu[..., None, :] @ P.reshape(P.shape[:-2] + (n * n,)))[..., 0, :].reshape(P.shape[:-3] + (n, n))
+    P_hat = P_hat + (np.swapaxes(d, -1, -2) * mu[..., None, :]) @ d
     return x_hat, P_hat

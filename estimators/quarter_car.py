@@ -102,8 +102,9 @@ def pressure_from_stiffness(kt: npt.ArrayLike, *, kt0: float = KT0, p0: float = 
 
 
 def _suspension_force(d, v, qc: QuarterCar):
-    nonlinear = np.abs(v) * v if qc.damper_law == "signed" else v * v
-    return qc.spring_rate * d + qc.spring_cubic * d**3 + qc.damping * v + qc.damping_nonlinear * nonlinear
+    return (qc.spring_rate + qc.spring_cubic * (d * d)) * d + (
+        qc.damping + qc.damping_nonlinear * (np.abs(v) if qc.damper_law == "signed" else v)
+    ) * v
 
 
 def accelerations(x: np.ndarray, z_road: npt.ArrayLike, qc: QuarterCar) -> tuple[np.ndarray, np.ndarray]:

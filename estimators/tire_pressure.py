@@ -41,7 +41,7 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
-from estimators.imm import PAPER_TRANSITION, imm_combine, imm_mix, imm_probabilities
+from estimators.imm import PAPER_TRANSITION, imm_mix, imm_probabilities
 from estimators.quarter_car import (
     IX_KT,
     KT0,
@@ -349,9 +349,10 @@ def estimate_pressure(
             x, P = post.x, post.P
             if n_modes > 1:
                 mu = imm_probabilities(cbar, post.log_likelihood, floor=settings.mu_floor)
-        x_hat, P_hat = imm_combine(x, P, mu)
-        kt_hat[:, k] = x_hat[:, IX_KT]
-        kt_sig[:, k] = np.sqrt(np.maximum(P_hat[:, IX_KT, IX_KT], 0.0))
+        kt_modes = x[..., IX_KT]  # eq. 13-14 for the k_t entry only (the rest is not reported)
+        kt_hat[:, k] = np.sum(mu * kt_modes, axis=-1)
+        spread = P[..., IX_KT, IX_KT] + (kt_modes - kt_hat[:, k, None]) ** 2
+        kt_sig[:, k] = np.sqrt(np.maximum(np.sum(mu * spread, axis=-1), 0.0))
         mode_prob[:, k] = mu
         mode_kt[:, k] = x[..., IX_KT]
     return PressureEstimate(

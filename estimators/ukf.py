@@ -141,9 +141,9 @@ def unscented_transform(
     sigmas: np.ndarray, w: SigmaWeights, noise: np.ndarray | None
 ) -> tuple[np.ndarray, np.ndarray]:
     """Weighted mean (..., d) and covariance (..., d, d) of sigma points (..., 2n+1, d), plus `noise`."""
-    mean = np.einsum("k,...kd->...d", w.wm, sigmas)
+    mean = w.wm @ sigmas
     dev = sigmas - mean[..., None, :]
-    cov = np.einsum("k,...ki,...kj->...ij", w.wc, dev, dev)
+    cov = (np.swapaxes(dev, -1, -2) * w.wc) @ dev
     if noise is not None:
         cov = cov + noise
     return mean, cov
@@ -202,6 +202,16 @@ def ukf_predict(
     return Prediction(x=x_prior, P=P_prior, sigmas=sigmas_prior, repaired=repaired | repaired_prior)
 
 
+def _inverse_and_logdet(S: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Inverse and log-determinant of a batch of SPD matrices (closed form for 2 x 2)."""
+    if S.shape[-1] == 2:
+        a, b, c, d = S[..., 0, 0], S[..., 0, 1], S[..., 1, 0], S[..., 1, 1]
+        det = a * d - b * c
+        inv = np.stack([np.stack([d, -b], -1), np.stack([-c, a], -1)], -2) / det[..., None, None]
+        return inv, np.log(det)
+    return np.linalg.inv(S), np.linalg.slogdet(S)[1]
+
+
 def ukf_update(
     pred: Prediction,
     z: np.ndarray,
@@ -219,14 +229,13 @@ def ukf_update(
     zp, S = unscented_transform(sigmas_h, w, R)
     dx = pred.sigmas - pred.x[..., None, :]
     dz = sigmas_h - zp[..., None, :]
-    pxz = np.einsum("k,...ki,...kj->...ij", w.wc, dx, dz)
-    S_inv = np.linalg.inv(S)
+    pxz = (np.swapaxes(dx, -1, -2) * w.wc) @ dz
+    S_inv, logdet = _inverse_and_logdet(S)
     K = pxz @ S_inv
     y = z - zp
-    x_post = pred.x + np.einsum("...ij,...j->...i", K, y)
+    x_post = pred.x + (K @ y[..., None])[..., 0]
     P_post = pred.P - K @ S @ np.swapaxes(K, -1, -2)
     m = y.shape[-1]
-    _, logdet = np.linalg.slogdet(S)
-    maha = np.einsum("...i,...ij,...j->...", y, S_inv, y)
+    maha = (y[..., None, :] @ S_inv @ y[..., :, None])[..., 0, 0]
     log_likelihood = -0.5 * (maha + logdet + m * np.log(2.0 * np.pi))
     return Update(x=x_post, P=P_post, y=y, S=S, K=K, log_likelihood=log_likelihood)
