@@ -1,0 +1,99 @@
+"""Monte Carlo of paper 000's estimators on the MuJoCo ground truth, per road class.
+
+Run: ``python bench/mujoco_monte_carlo.py [runs_per_class] [duration_s]`` (default 20, 10)
+— prints JSON. For each class A–D: `runs_per_class` straight runs with pressure
+uniform 130–230 kPa, speed uniform 40–80 km/h (paper 000, Table 4) and the road
+level drawn log-uniformly inside the class band (not at its centre), seeded; the
+front-left corner's accelerometers (0.5 m/s² noise) go to the paper's IMM (Table 3
+modes) with both road inputs and to its single UKF (mode A). Reported per class
+and estimator: the paper's indexes (eq. 23 mean error, eq. 24 error std, eq. 25
+mean σ-bound) of the pressure at 2, 5 and 10 s, in kPa, and the fraction of runs
+whose error is inside ±2σ at the end.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+
+import numpy as np
+
+from estimators.quarter_car import sprung_mass_share
+from estimators.tire_pressure import estimate_pressure, load_modes
+from mjcf.vehicle import load_vehicle
+from pipeline.iso8608 import draw_level_in_class
+from pipeline.scenario import parse_scenario
+from pipeline.scoring import monte_carlo_indexes
+from pipeline.simulator import simulate
+
+
+def _runs(road_class: str, n_runs: int, duration: float, rng: np.random.Generator):
+    acc_s, acc_u, pressure, speed, levels = [], [], [], [], []
+    for i in range(n_runs):
+        p = rng.uniform(130.0, 230.0)
+        v = rng.uniform(40.0, 80.0)
+        level = draw_level_in_class(road_class, rng)
+        length = 10.0 + v / 3.6 * duration + 40.0
+        scenario = parse_scenario(
+            {
+                "duration_s": duration,
+                "speed_kmh": v,
+                "seed": int(rng.integers(0, 2**31)),
+                "road": {"segments": [{"length_m": length, "gd_n0": level}]},
+                "pressure_kpa": p,
+            }
+        )
+        table = simulate(scenario).table
+        acc_s.append(table.fl_accel_sprung_mps2.to_numpy())
+        acc_u.append(table.fl_accel_unsprung_mps2.to_numpy())
+        pressure.append(p)
+        speed.append(v / 3.6)
+        levels.append(level)
+        del i
+    return np.array(acc_s), np.array(acc_u), np.array(pressure), np.array(speed), np.array(levels)
+
+
+def main(runs_per_class: int = 20, duration: float = 10.0) -> dict:
+    rng = np.random.default_rng(2022)
+    vehicle = load_vehicle()
+    ms = sprung_mass_share(vehicle.chassis.mass, a_opposite=vehicle.chassis.a2, wheelbase=vehicle.wheelbase)
+    mus = vehicle.wheel.unsprung_mass_front
+    paper = load_modes("paper")
+    estimators = {
+        "imm_synthetic": (paper, "synthetic"),
+        "imm_augmented": (paper, "augmented"),
+        "ukf_synthetic": (paper.subset(("A",)), "synthetic"),
+        "ukf_augmented": (paper.subset(("A",)), "augmented"),
+    }
+    out = {"runs_per_class": runs_per_class, "duration_s": duration, "corner": "fl", "classes": {}}
+    for road_class in "ABCD":
+        acc_s, acc_u, pressure, speed, levels = _runs(road_class, runs_per_class, duration, rng)
+        row = {"level_range_m3": [float(levels.min()), float(levels.max())]}
+        for name, (modes, road_input) in estimators.items():
+            est = estimate_pressure(acc_s, acc_u, 1e-3, modes=modes, sprung_mass=ms, unsprung_mass=mus,
+                                    road_input=road_input, speed_mps=speed, seed=7)  # fmt: skip
+            truth = np.broadcast_to(pressure[:, None], est.pressure_pa.shape)
+            idx = monte_carlo_indexes(truth, est.pressure_pa / 1e3, est.pressure_sigma_pa / 1e3)
+            error = est.pressure_pa[:, -1] / 1e3 - pressure
+            row[name] = {
+                f"{t:g}s": {
+                    "mean_error_kpa": float(idx.mean_error[int(t / 1e-3) - 1]),
+                    "error_std_kpa": float(idx.error_std[int(t / 1e-3) - 1]),
+                    "sigma_bound_kpa": float(idx.sigma_bound[int(t / 1e-3) - 1]),
+                }
+                for t in (2.0, 5.0, duration)
+            }
+            row[name]["inside_2sigma_at_end"] = float(
+                np.mean(np.abs(error) <= 2 * est.pressure_sigma_pa[:, -1] / 1e3)
+            )
+            if est.mode_probability is not None:
+                row[name]["mode_probability_at_end"] = (
+                    est.mode_probability[:, -1].mean(axis=0).round(3).tolist()
+                )
+        out["classes"][road_class] = row
+    print(json.dumps(out, indent=1))
+    return out
+
+
+if __name__ == "__main__":
+    main(*(int(a) if i == 0 else float(a) for i, a in enumerate(sys.argv[1:3])))
