@@ -5,7 +5,8 @@ Run: ``python bench/mujoco_monte_carlo.py [runs_per_class] [duration_s]`` (defau
 uniform 130–230 kPa, speed uniform 40–80 km/h (paper 000, Table 4) and the road
 level drawn log-uniformly inside the class band (not at its centre), seeded; the
 front-left corner's accelerometers (0.5 m/s² noise) go to the paper's IMM (Table 3
-modes) with both road inputs and to its single UKF (mode A). Reported per class
+modes) with both road inputs, to its single UKF (mode A), and to the road-level-free
+joint estimator on the corner's linearized physical quarter car. Reported per class
 and estimator: the paper's indexes (eq. 23 mean error, eq. 24 error std, eq. 25
 mean σ-bound) of the pressure at 2, 5 and 10 s, in kPa, and the fraction of runs
 whose error is inside ±2σ at the end.
@@ -18,6 +19,7 @@ import sys
 
 import numpy as np
 
+from estimators.joint import LinearQuarterCar, estimate_joint
 from estimators.quarter_car import sprung_mass_share
 from estimators.tire_pressure import estimate_pressure, load_modes
 from mjcf.vehicle import load_vehicle
@@ -90,6 +92,26 @@ def main(runs_per_class: int = 20, duration: float = 10.0) -> dict:
                 row[name]["mode_probability_at_end"] = (
                     est.mode_probability[:, -1].mean(axis=0).round(3).tolist()
                 )
+        susp = vehicle.suspension
+        qc = LinearQuarterCar(
+            ms, mus, vehicle.spring_rate[0], 0.5 * (susp.damper_compression_low + susp.damper_rebound_low)
+        )
+        est = estimate_joint(acc_s, acc_u, 1e-3, qc=qc, speed_mps=speed)
+        truth = np.broadcast_to(pressure[:, None], est.pressure_pa.shape)
+        idx = monte_carlo_indexes(truth, est.pressure_pa / 1e3, est.pressure_sigma_pa / 1e3)
+        error = est.pressure_pa[:, -1] / 1e3 - pressure
+        row["joint"] = {
+            f"{t:g}s": {
+                "mean_error_kpa": float(idx.mean_error[int(t / 1e-3) - 1]),
+                "error_std_kpa": float(idx.error_std[int(t / 1e-3) - 1]),
+                "sigma_bound_kpa": float(idx.sigma_bound[int(t / 1e-3) - 1]),
+            }
+            for t in (2.0, 5.0, duration)
+        }
+        row["joint"]["inside_2sigma_at_end"] = float(
+            np.mean(np.abs(error) <= 2 * est.pressure_sigma_pa[:, -1] / 1e3)
+        )
+        row["joint"]["level_over_truth_at_end"] = (est.road_level[:, -1] / levels).round(2).tolist()
         out["classes"][road_class] = row
     print(json.dumps(out, indent=1))
     return out

@@ -354,6 +354,7 @@ def render_command(
 class EstimatorName(StrEnum):
     imm = "imm"
     ukf = "ukf"
+    joint = "joint"
 
 
 class RoadInput(StrEnum):

@@ -20,6 +20,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from estimators.joint import LinearQuarterCar, estimate_joint
 from estimators.quarter_car import pressure_from_stiffness, sprung_mass_share
 from estimators.tire_pressure import estimate_pressure, load_modes
 from mjcf.vehicle import CORNERS, load_vehicle
@@ -73,7 +74,8 @@ def _load_run(path: str | Path, corner: str) -> tuple[pd.DataFrame, dict, float]
 def estimate_run(
     path: str | Path, *, corner: str, estimator: str, params: str, road_input: str, seed: int
 ) -> EstimateRun:
-    """Run paper 000's IMM (``estimator="imm"``) or single UKF (``"ukf"``) on one corner of a run."""
+    """Run paper 000's IMM (``estimator="imm"``), its single UKF (``"ukf"``) or the road-level-free
+    estimator (``"joint"``, on the corner's linearized physical quarter car) on one corner of a run."""
     frame, meta, dt = _load_run(path, corner)
     vehicle = load_vehicle()
     scenario = meta.get("scenario", {})
@@ -86,13 +88,15 @@ def estimate_run(
         load=load,
     )
     mus = vehicle.unsprung_mass[CORNERS.index(corner)]
+    if estimator == "joint":
+        return _estimate_joint_run(path, frame, corner, vehicle, ms, mus, dt)
     modes = load_modes(params)
     if estimator == "ukf":
         if "A" not in modes.classes:
             raise InputError("--estimator ukf uses the class A mode, which the parameter file lacks")
         modes = modes.subset(("A",))
     elif estimator != "imm":
-        raise InputError(f"--estimator must be imm or ukf, got {estimator!r}")
+        raise InputError(f"--estimator must be imm, ukf or joint, got {estimator!r}")
     est = estimate_pressure(
         frame[f"{corner}_accel_sprung_mps2"].to_numpy(),
         frame[f"{corner}_accel_unsprung_mps2"].to_numpy(),
@@ -125,6 +129,43 @@ def estimate_run(
         "sprung_mass_kg": ms,
         "unsprung_mass_kg": float(mus),
         "covariance_repairs": int(est.repairs.sum()),
+        **est.info,
+    }
+    return EstimateRun(table=pd.DataFrame(columns), metadata=metadata)
+
+
+def _estimate_joint_run(path, frame, corner, vehicle, ms, mus, dt) -> EstimateRun:
+    """The road-level-free estimator on the corner's linearized physical quarter car."""
+    s = vehicle.suspension
+    qc = LinearQuarterCar(
+        sprung_mass=ms,
+        unsprung_mass=float(mus),
+        spring_rate=float(vehicle.spring_rate[CORNERS.index(corner)]),
+        damping=0.5 * (s.damper_compression_low + s.damper_rebound_low),
+    )
+    est = estimate_joint(
+        frame[f"{corner}_accel_sprung_mps2"].to_numpy(),
+        frame[f"{corner}_accel_unsprung_mps2"].to_numpy(),
+        dt,
+        qc=qc,
+        speed_mps=max(float(frame["speed_mps"].mean()), 1.0),
+    )
+    columns = {
+        "t_s": frame["t_s"].to_numpy(),
+        "pressure_hat_kpa": est.pressure_pa[0] / 1e3,
+        "pressure_sigma_kpa": est.pressure_sigma_pa[0] / 1e3,
+        "tire_stiffness_hat_npm": est.stiffness[0],
+        "tire_stiffness_sigma_npm": est.stiffness_sigma[0],
+        "road_level_hat_m3": est.road_level[0],
+    }
+    metadata = {
+        "run_file": str(path),
+        "corner": corner,
+        "estimator": "joint",
+        "road_input": "estimated level",
+        "sprung_mass_kg": ms,
+        "unsprung_mass_kg": float(mus),
+        "quarter_car": {"spring_rate": qc.spring_rate, "damping": qc.damping},
         **est.info,
     }
     return EstimateRun(table=pd.DataFrame(columns), metadata=metadata)
