@@ -43,7 +43,11 @@ import numpy as np
 import numpy.typing as npt
 import scipy.signal
 
-from estimators.quarter_car import KT0, P0, PFZ1, pressure_from_stiffness, stiffness_from_pressure
+from estimators.quarter_car import (
+    pressure_from_stiffness,
+    pressure_sigma_from_stiffness_sigma,
+    stiffness_from_pressure,
+)
 from pipeline.errors import InputError
 
 __all__ = ["JointEstimate", "LinearQuarterCar", "estimate_joint", "whittle_loglik"]
@@ -221,7 +225,7 @@ def estimate_joint(
         stiffness=kt_hat,
         stiffness_sigma=kt_sig,
         pressure_pa=pressure_from_stiffness(kt_hat),
-        pressure_sigma_pa=kt_sig * P0 / (KT0 * PFZ1),
+        pressure_sigma_pa=pressure_sigma_from_stiffness_sigma(kt_sig),
         road_level=level_hat,
         info={"estimator": "joint", "segment_s": segment_s, "band_cycles_per_m": list(band_cycles_per_m)},
     )

@@ -42,6 +42,7 @@ __all__ = [
     "accelerations",
     "measurement_noise",
     "pressure_from_stiffness",
+    "pressure_sigma_from_stiffness_sigma",
     "process_euler",
     "process_noise",
     "process_semi_implicit",
@@ -99,6 +100,13 @@ def stiffness_from_pressure(pressure: npt.ArrayLike, *, kt0: float = KT0, p0: fl
 def pressure_from_stiffness(kt: npt.ArrayLike, *, kt0: float = KT0, p0: float = P0, pfz1: float = PFZ1):
     """Inflation pressure for tire stiffness `kt` (N/m), Pa (inverse of eq. 3–4)."""
     return p0 * (1.0 + (np.asarray(kt, dtype=float) / kt0 - 1.0) / pfz1)
+
+
+def pressure_sigma_from_stiffness_sigma(
+    sigma_kt: npt.ArrayLike, *, kt0: float = KT0, p0: float = P0, pfz1: float = PFZ1
+):
+    """Standard deviation of the pressure (Pa) for a k_t standard deviation (N/m): eq. 3–4 is linear."""
+    return np.asarray(sigma_kt, dtype=float) * p0 / (kt0 * pfz1)
 
 
 def _suspension_force(d, v, qc: QuarterCar):

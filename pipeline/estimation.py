@@ -108,13 +108,7 @@ def estimate_run(
         speed_mps=max(float(frame["speed_mps"].mean()), 1.0),
         seed=seed,
     )
-    columns = {
-        "t_s": frame["t_s"].to_numpy(),
-        "pressure_hat_kpa": est.pressure_pa[0] / 1e3,
-        "pressure_sigma_kpa": est.pressure_sigma_pa[0] / 1e3,
-        "tire_stiffness_hat_npm": est.stiffness[0],
-        "tire_stiffness_sigma_npm": est.stiffness_sigma[0],
-    }
+    columns = _common_columns(frame, est)
     if est.mode_probability is not None:
         for s, letter in enumerate(est.classes):
             columns[f"mode_prob_{letter}"] = est.mode_probability[0, :, s]
@@ -134,6 +128,17 @@ def estimate_run(
     return EstimateRun(table=pd.DataFrame(columns), metadata=metadata)
 
 
+def _common_columns(frame: pd.DataFrame, est) -> dict:
+    """The columns every estimate file has, from an estimate of one run."""
+    return {
+        "t_s": frame["t_s"].to_numpy(),
+        "pressure_hat_kpa": est.pressure_pa[0] / 1e3,
+        "pressure_sigma_kpa": est.pressure_sigma_pa[0] / 1e3,
+        "tire_stiffness_hat_npm": est.stiffness[0],
+        "tire_stiffness_sigma_npm": est.stiffness_sigma[0],
+    }
+
+
 def _estimate_joint_run(path, frame, corner, vehicle, ms, mus, dt) -> EstimateRun:
     """The road-level-free estimator on the corner's linearized physical quarter car."""
     s = vehicle.suspension
@@ -150,14 +155,7 @@ def _estimate_joint_run(path, frame, corner, vehicle, ms, mus, dt) -> EstimateRu
         qc=qc,
         speed_mps=max(float(frame["speed_mps"].mean()), 1.0),
     )
-    columns = {
-        "t_s": frame["t_s"].to_numpy(),
-        "pressure_hat_kpa": est.pressure_pa[0] / 1e3,
-        "pressure_sigma_kpa": est.pressure_sigma_pa[0] / 1e3,
-        "tire_stiffness_hat_npm": est.stiffness[0],
-        "tire_stiffness_sigma_npm": est.stiffness_sigma[0],
-        "road_level_hat_m3": est.road_level[0],
-    }
+    columns = {**_common_columns(frame, est), "road_level_hat_m3": est.road_level[0]}
     metadata = {
         "run_file": str(path),
         "corner": corner,
