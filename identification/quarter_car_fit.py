@@ -208,26 +208,53 @@ def identify(
     seed: int,
     bounds: dict | None = None,
     n_ref_dirs: int | None = None,
+    progress: str | None = None,
+    progress_position: int = 0,
 ) -> IdentificationResult:
     """Fit (cs, csnl, ks, ksnl) to `data` with NSGA-III and pick the compromise solution.
 
     Parameters
     ----------
     pop_size : int
-        Population size (≥ the number of reference directions is advisable).
+        Population size; raised to the number of reference directions if below it.
     n_gen : int
         Generations (paper: 1000).
     seed : int
         Seed of the reference directions and of the GA: same seed, same parameters.
     n_ref_dirs : int, optional
-        Number of energy reference directions (default: `pop_size`).
+        Number of energy reference directions (default: `pop_size`, at least objectives + 1).
+    progress : str, optional
+        Show a progress bar over generations with this label (stderr).
+    progress_position : int
+        Line of that bar when several run side by side.
     """
     if pop_size < 4 or n_gen < 1:
         raise InputError(f"pop_size must be ≥ 4 and n_gen ≥ 1, got {pop_size} and {n_gen}")
     problem = QuarterCarFit(data, bounds)
-    ref_dirs = get_reference_directions("energy", problem.n_obj, n_ref_dirs or pop_size, seed=seed)
-    algorithm = NSGA3(ref_dirs=ref_dirs, pop_size=pop_size)
-    result = minimize(problem, algorithm, ("n_gen", n_gen), seed=seed, verbose=False)
+    # energy directions need more points than objectives; the population at least one per direction
+    n_dirs = max(n_ref_dirs or pop_size, problem.n_obj + 1)
+    ref_dirs = get_reference_directions("energy", problem.n_obj, n_dirs, seed=seed)
+    algorithm = NSGA3(ref_dirs=ref_dirs, pop_size=max(pop_size, n_dirs))
+    callback = None
+    if progress is not None:
+        from pymoo.core.callback import Callback
+        from tqdm import tqdm
+
+        class _Bar(Callback):
+            def __init__(self):
+                super().__init__()
+                self.bar = tqdm(
+                    total=n_gen, desc=progress, position=progress_position, unit="gen", leave=False
+                )
+
+            def notify(self, algorithm):
+                self.bar.update(1)
+
+        callback = _Bar()
+    extra = {} if callback is None else {"callback": callback}
+    result = minimize(problem, algorithm, ("n_gen", n_gen), seed=seed, verbose=False, **extra)
+    if callback is not None:
+        callback.bar.close()
     X = np.atleast_2d(result.pop.get("X"))
     F = np.atleast_2d(result.pop.get("F"))
     best = select_compromise(F)

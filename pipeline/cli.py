@@ -413,6 +413,54 @@ def score_command(
         typer.echo(f"{key:<28} {value:.4g}" if isinstance(value, float) else f"{key:<28} {value}")
 
 
+@app.command("identify")
+def identify_command(
+    out: Annotated[
+        Path,
+        typer.Option("--out", help="Parameter file (.json); a .csv and .md table are written beside it."),
+    ],
+    classes: Annotated[
+        str, typer.Option(help="Road classes to identify, comma-separated (A–H).")
+    ] = "A,B,C,D",
+    generations: Annotated[int, typer.Option(help="GA generations (1–100000; paper: 1000).")] = 1000,
+    pop: Annotated[int, typer.Option(help="GA population size (4–10000).")] = 100,
+    duration: Annotated[
+        float, typer.Option(help="Length of each of the nine runs per class, s (1–600).")
+    ] = 10.0,
+    seed: Annotated[int, typer.Option(help="Seed of roads and GA (≥ 0).")] = 1,
+    jobs: Annotated[int, typer.Option(help="Parallel processes, one class each (1–64).")] = 1,
+    corner: Annotated[str, typer.Option(help="Corner whose signals are fitted: fl, fr, rl or rr.")] = "fl",
+    progress: Annotated[bool, typer.Option(help="Show a progress bar per class.")] = True,
+) -> None:
+    """Fit quarter-car parameters (cs, csnl, ks, ksnl) per road class to the MuJoCo SUV (paper 000 §5.2)."""
+    from pipeline.identification_runs import identify_classes, write_parameter_file
+
+    _check_out(out, "--out", (".json",))
+    letters = tuple(c.strip().upper() for c in classes.split(",") if c.strip())
+    bad = [c for c in letters if c not in CLASSES]
+    if not letters or bad:
+        raise InputError(f"--classes must list classes A–H separated by commas, got {classes!r}")
+    if len(set(letters)) != len(letters):
+        raise InputError(f"--classes lists a class twice: {classes!r}")
+    if not 1 <= generations <= 100000:
+        raise InputError(f"--generations must be in [1, 100000], got {generations}")
+    if not 4 <= pop <= 10000:
+        raise InputError(f"--pop must be in [4, 10000], got {pop}")
+    if not 1.0 <= duration <= 600.0:
+        raise InputError(f"--duration must be in [1, 600] s, got {duration:g}")
+    if seed < 0:
+        raise InputError(f"--seed must be ≥ 0, got {seed}")
+    if not 1 <= jobs <= 64:
+        raise InputError(f"--jobs must be in [1, 64], got {jobs}")
+    if corner not in ("fl", "fr", "rl", "rr"):
+        raise InputError(f"--corner must be one of fl, fr, rl, rr, got {corner!r}")
+    content = identify_classes(letters, duration_s=duration, seed=seed, pop_size=pop, n_gen=generations,
+                               corner=corner, jobs=jobs, progress=progress)  # fmt: skip
+    write_parameter_file(content, out)
+    typer.echo(f"wrote {out}, {out.with_suffix('.csv')} and {out.with_suffix('.md')}")
+    typer.echo(out.with_suffix(".md").read_text())
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI with `argv` (default: ``sys.argv[1:]``); return the exit status.
 

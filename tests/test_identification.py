@@ -72,3 +72,44 @@ def test_bad_fit_data():
         FitData(np.zeros((2, 5)), np.zeros((2, 5)), np.zeros((2, 5)), np.zeros(3), MS, MUS, DT)
     with pytest.raises(InputError, match="NaN"):
         FitData(np.full((1, 5), np.nan), np.zeros((1, 5)), np.zeros((1, 5)), np.ones(1), MS, MUS, DT)
+
+
+def test_identify_cli_writes_a_loadable_parameter_file(tmp_path, capsys):
+    import json
+
+    from estimators.tire_pressure import load_modes
+    from pipeline.cli import main
+
+    out = tmp_path / "params.json"
+    argv = ["identify", "--classes", "B", "--generations", "3", "--pop", "8", "--duration", "1",
+            "--seed", "2", "--out", str(out), "--no-progress"]  # fmt: skip
+    assert main(argv) == 0
+    content = json.loads(out.read_text())
+    assert set(content["classes"]) == {"B"} and set(content["classes"]["B"]) == {"cs", "csnl", "ks", "ksnl"}
+    per_class = content["metadata"]["per_class"]["B"]
+    assert len(per_class["scenarios"]) == 9 and len(per_class["objectives_mps2"]) == 18
+    levels = [s["gd_n0_m3"] for s in per_class["scenarios"]]
+    assert all(32e-6 <= g <= 128e-6 for g in levels) and len(set(levels)) == 9  # anywhere in the band
+    assert load_modes(out).classes == ("B",)
+    assert (tmp_path / "params.csv").is_file() and "| cs | N s/m |" in (tmp_path / "params.md").read_text()
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--classes", "A,Q"], "--classes must list classes A–H"),
+        (["--classes", "A,A"], "lists a class twice"),
+        (["--generations", "0"], "--generations must be in [1, 100000]"),
+        (["--pop", "2"], "--pop must be in [4, 10000]"),
+        (["--duration", "0.5"], "--duration must be in [1, 600] s"),
+        (["--jobs", "0"], "--jobs must be in [1, 64]"),
+        (["--corner", "xx"], "--corner must be one of fl, fr, rl, rr"),
+    ],
+)
+def test_identify_cli_bad_input(tmp_path, capsys, args, message):
+    from pipeline.cli import main
+
+    out = tmp_path / "params.json"
+    assert main(["identify", *args, "--out", str(out)]) == 2
+    assert message in capsys.readouterr().err
+    assert not out.exists()
