@@ -45,7 +45,9 @@ def _scenario_seeds(road_class: str, seed: int) -> np.random.SeedSequence:
     return np.random.SeedSequence([seed, CLASSES.index(road_class)])
 
 
-def _run_one(args: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+def corner_run(args: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """One noise-free straight run: ``(road_class, level, speed_kmh, pressure_kpa, duration_s, seed,
+    corner)`` → road under the tire (m), sprung and unsprung acceleration (m/s²), k_t (N/m)."""
     road_class, level, speed, pressure, duration, run_seed, corner = args
     length = 10.0 + speed / 3.6 * duration + 40.0
     scenario = parse_scenario(
@@ -65,6 +67,18 @@ def _run_one(args: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
         table[f"{corner}_accel_unsprung_true_mps2"].to_numpy(),
         float(table[f"{corner}_tire_stiffness_npm"].iloc[0]),
     )
+
+
+def corner_masses(corner: str) -> tuple[float, float]:
+    """Sprung (paper 000 eq. 2, no load) and unsprung mass of a corner of the SUV, kg."""
+    vehicle = load_vehicle()
+    front = corner.startswith("f")
+    ms = sprung_mass_share(
+        vehicle.chassis.mass,
+        a_opposite=vehicle.chassis.a2 if front else vehicle.chassis.a1,
+        wheelbase=vehicle.wheelbase,
+    )
+    return ms, float(vehicle.unsprung_mass[CORNERS.index(corner)])
 
 
 def class_fit_data(
@@ -87,23 +101,17 @@ def class_fit_data(
             labels.append(f"{speed:g}kmh_{pressure:g}kPa")
     if jobs > 1:
         with ProcessPoolExecutor(max_workers=jobs) as pool:
-            runs = list(pool.map(_run_one, tasks))
+            runs = list(pool.map(corner_run, tasks))
     else:
-        runs = [_run_one(t) for t in tasks]
-    vehicle = load_vehicle()
-    front = corner.startswith("f")
-    ms = sprung_mass_share(
-        vehicle.chassis.mass,
-        a_opposite=vehicle.chassis.a2 if front else vehicle.chassis.a1,
-        wheelbase=vehicle.wheelbase,
-    )
+        runs = [corner_run(t) for t in tasks]
+    ms, mus = corner_masses(corner)
     data = FitData(
         road=np.array([r[0] for r in runs]),
         accel_sprung=np.array([r[1] for r in runs]),
         accel_unsprung=np.array([r[2] for r in runs]),
         stiffness=np.array([r[3] for r in runs]),
         sprung_mass=ms,
-        unsprung_mass=float(vehicle.unsprung_mass[CORNERS.index(corner)]),
+        unsprung_mass=mus,
         dt=1e-3,
         labels=tuple(labels),
     )
