@@ -116,10 +116,18 @@ def _bank(table: dict, source: str) -> ModeBank:
     return ModeBank(classes=classes, source=source, **cols)
 
 
-def load_modes(source: str | Path = "paper") -> ModeBank:
-    """Mode parameters: ``"paper"`` (Table 3) or a JSON file ``{"classes": {"A": {...}, ...}}``."""
+IDENTIFIED_FILE = Path(__file__).parents[1] / "identification" / "data" / "suv_fl_paper_scale.json"
+"""QC parameters identified on this project's SUV (front-left corner, classes A–D, NSGA-III
+pop 100 × 1000 generations, seed 1; ``suvtwin identify`` / ``bench/identification_speed.py paper``)."""
+
+
+def load_modes(source: str | Path = "identified") -> ModeBank:
+    """Mode parameters: ``"identified"`` (this SUV, shipped), ``"paper"`` (Table 3) or a JSON file
+    ``{"classes": {"A": {...}, ...}}``."""
     if str(source) == "paper":
         return _bank(PAPER_TABLE_3, "Brancati & Tufano 2022, Table 3")
+    if str(source) == "identified":
+        source = IDENTIFIED_FILE
     path = Path(source)
     if not path.is_file():
         raise InputError(f"--params: file {str(path)!r} does not exist")

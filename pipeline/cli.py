@@ -375,7 +375,12 @@ def estimate_command(
         EstimatorName,
         typer.Option(help="imm: paper 000's IMM of 4 UKFs (classes A-D); ukf: its single UKF (A)."),
     ] = EstimatorName.imm,
-    params: Annotated[str, typer.Option(help="Mode parameters: 'paper' (Table 3) or a JSON file.")] = "paper",
+    params: Annotated[
+        str,
+        typer.Option(
+            help="Mode parameters: 'identified' (this SUV, shipped), 'paper' (Table 3) or a JSON file."
+        ),
+    ] = "identified",
     road_input: Annotated[
         RoadInput,
         typer.Option(help="What each mode assumes for the road: the paper's synthetic road or a road state."),

@@ -129,3 +129,13 @@ def test_bad_measurements_are_refused():
     with pytest.raises(InputError, match="road input"):
         estimate_pressure([0.0, 0.0], [0.0, 0.0], DT, modes=LINEAR, sprung_mass=MS, unsprung_mass=MUS,
                           road_input="guess", speed_mps=SPEED)  # fmt: skip
+
+
+def test_shipped_identified_parameters_are_the_default():
+    from identification.quarter_car_fit import DEFAULT_BOUNDS
+
+    bank = load_modes()
+    assert bank.classes == ("A", "B", "C", "D") and "suv_fl_paper_scale.json" in bank.source
+    for name in ("cs", "csnl", "ks", "ksnl"):
+        low, high = DEFAULT_BOUNDS[name]
+        assert np.all((getattr(bank, name) >= low) & (getattr(bank, name) <= high)), name
