@@ -1,12 +1,13 @@
 """Monte Carlo of paper 000's estimators on the MuJoCo ground truth, per road class.
 
-Run: ``python bench/mujoco_monte_carlo.py [runs_per_class] [duration_s]`` (default 20, 10)
-— prints JSON. For each class A–D: `runs_per_class` straight runs with pressure
+Run: ``python bench/mujoco_monte_carlo.py [runs_per_class] [duration_s] [paper|identified|file]``
+(default 20, 10, paper) — prints JSON. For each class A–D: `runs_per_class` straight runs with pressure
 uniform 130–230 kPa, speed uniform 40–80 km/h (paper 000, Table 4) and the road
 level drawn log-uniformly inside the class band (not at its centre), seeded; the
-front-left corner's accelerometers (0.5 m/s² noise) go to the paper's IMM (Table 3
-modes) with both road inputs, to its single UKF (mode A), and to the road-level-free
-joint estimator on the corner's linearized physical quarter car. Reported per class
+front-left corner's accelerometers (0.5 m/s² noise) go to the paper's IMM (modes from
+Table 3, or this SUV's identified parameters) with both road inputs, to its single UKF
+(mode A), and to the road-level-free joint estimator on the corner's linearized
+physical quarter car. Reported per class
 and estimator: the paper's indexes (eq. 23 mean error, eq. 24 error std, eq. 25
 mean σ-bound) of the pressure at 2, 5 and 10 s, in kPa, and the fraction of runs
 whose error is inside ±2σ at the end.
@@ -55,19 +56,25 @@ def _runs(road_class: str, n_runs: int, duration: float, rng: np.random.Generato
     return np.array(acc_s), np.array(acc_u), np.array(pressure), np.array(speed), np.array(levels)
 
 
-def main(runs_per_class: int = 20, duration: float = 10.0) -> dict:
+def main(runs_per_class: int = 20, duration: float = 10.0, params: str = "paper") -> dict:
     rng = np.random.default_rng(2022)
     vehicle = load_vehicle()
     ms = sprung_mass_share(vehicle.chassis.mass, a_opposite=vehicle.chassis.a2, wheelbase=vehicle.wheelbase)
     mus = vehicle.wheel.unsprung_mass_front
-    paper = load_modes("paper")
+    paper = load_modes(params)
     estimators = {
         "imm_synthetic": (paper, "synthetic"),
         "imm_augmented": (paper, "augmented"),
         "ukf_synthetic": (paper.subset(("A",)), "synthetic"),
         "ukf_augmented": (paper.subset(("A",)), "augmented"),
     }
-    out = {"runs_per_class": runs_per_class, "duration_s": duration, "corner": "fl", "classes": {}}
+    out = {
+        "runs_per_class": runs_per_class,
+        "duration_s": duration,
+        "corner": "fl",
+        "params": params,
+        "classes": {},
+    }
     for road_class in "ABCD":
         acc_s, acc_u, pressure, speed, levels = _runs(road_class, runs_per_class, duration, rng)
         row = {"level_range_m3": [float(levels.min()), float(levels.max())]}
@@ -118,4 +125,9 @@ def main(runs_per_class: int = 20, duration: float = 10.0) -> dict:
 
 
 if __name__ == "__main__":
-    main(*(int(a) if i == 0 else float(a) for i, a in enumerate(sys.argv[1:3])))
+    args = sys.argv[1:]
+    main(
+        int(args[0]) if len(args) > 0 else 20,
+        float(args[1]) if len(args) > 1 else 10.0,
+        args[2] if len(args) > 2 else "paper",
+    )
