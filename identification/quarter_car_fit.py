@@ -52,6 +52,7 @@ __all__ = [
     "identify",
     "objectives",
     "select_compromise",
+    "simulate_accelerations",
 ]
 
 PARAMETER_NAMES = ("cs", "csnl", "ks", "ksnl")
@@ -102,39 +103,77 @@ class FitData:
 
 
 @numba.njit(cache=True)
+def _simulate_scenario(cs, csnl, ks, ksnl, road, k_t, ms, mus, dt, signed, acc_s, acc_u):
+    """Accelerations of one QC on one road (writes acc_s, acc_u of shape (T,)), m/s²."""
+    zs = road[0]
+    zu = road[0]
+    vs = 0.0
+    vu = 0.0
+    n_t = road.shape[0]
+    for k in range(n_t):
+        d = zs - zu
+        v = vs - vu
+        nl = abs(v) * v if signed else v * v
+        force = (ks + ksnl * d * d) * d + cs * v + csnl * nl
+        acc_s[k] = -force / ms
+        acc_u[k] = (force - k_t * (zu - road[k])) / mus
+        if k + 1 < n_t:  # semi-implicit Euler, road at mid-step
+            mid = 0.5 * (road[k] + road[k + 1])
+            vs += acc_s[k] * dt
+            vu += (force - k_t * (zu - mid)) / mus * dt
+            zs += vs * dt
+            zu += vu * dt
+
+
+@numba.njit(cache=True)
 def _rmse_population(params, road, acc_s, acc_u, kt, ms, mus, dt, signed):
     """RMSE of sprung and unsprung acceleration, shape (P, 2S): columns s (sprung) and S + s."""
     n_pop, n_sc, n_t = params.shape[0], road.shape[0], road.shape[1]
     out = np.empty((n_pop, 2 * n_sc))
+    sim_s = np.empty(n_t)
+    sim_u = np.empty(n_t)
     for p in range(n_pop):
-        cs, csnl, ks, ksnl = params[p, 0], params[p, 1], params[p, 2], params[p, 3]
         for s in range(n_sc):
-            zs = road[s, 0]
-            zu = road[s, 0]
-            vs = 0.0
-            vu = 0.0
+            _simulate_scenario(
+                params[p, 0],
+                params[p, 1],
+                params[p, 2],
+                params[p, 3],
+                road[s],
+                kt[s],
+                ms,
+                mus,
+                dt,
+                signed,
+                sim_s,
+                sim_u,
+            )
             err_s = 0.0
             err_u = 0.0
-            k_t = kt[s]
             for k in range(n_t):
-                d = zs - zu
-                v = vs - vu
-                nl = abs(v) * v if signed else v * v
-                force = (ks + ksnl * d * d) * d + cs * v + csnl * nl
-                a_s = -force / ms
-                a_u = (force - k_t * (zu - road[s, k])) / mus
-                err_s += (a_s - acc_s[s, k]) ** 2
-                err_u += (a_u - acc_u[s, k]) ** 2
-                if k + 1 < n_t:  # semi-implicit Euler, road at mid-step
-                    mid = 0.5 * (road[s, k] + road[s, k + 1])
-                    a_um = (force - k_t * (zu - mid)) / mus
-                    vs += a_s * dt
-                    vu += a_um * dt
-                    zs += vs * dt
-                    zu += vu * dt
+                err_s += (sim_s[k] - acc_s[s, k]) ** 2
+                err_u += (sim_u[k] - acc_u[s, k]) ** 2
             out[p, s] = np.sqrt(err_s / n_t)
             out[p, n_sc + s] = np.sqrt(err_u / n_t)
     return out
+
+
+def simulate_accelerations(parameters: dict, data: FitData, scenario: int) -> tuple[np.ndarray, np.ndarray]:
+    """Sprung and unsprung acceleration (m/s², shape (T,)) of the QC with `parameters` in one scenario."""
+    acc_s = np.empty(data.road.shape[1])
+    acc_u = np.empty(data.road.shape[1])
+    _simulate_scenario(
+        *(float(parameters[n]) for n in PARAMETER_NAMES),
+        np.ascontiguousarray(data.road[scenario], dtype=float),
+        float(data.stiffness[scenario]),
+        float(data.sprung_mass),
+        float(data.unsprung_mass),
+        float(data.dt),
+        data.damper_law == "signed",
+        acc_s,
+        acc_u,
+    )
+    return acc_s, acc_u
 
 
 def objectives(params: np.ndarray, data: FitData) -> np.ndarray:

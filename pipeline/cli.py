@@ -460,9 +460,11 @@ def identify_command(
     if corner not in ("fl", "fr", "rl", "rr"):
         raise InputError(f"--corner must be one of fl, fr, rl, rr, got {corner!r}")
     content = identify_classes(letters, duration_s=duration, seed=seed, pop_size=pop, n_gen=generations,
-                               corner=corner, jobs=jobs, progress=progress)  # fmt: skip
+                               corner=corner, jobs=jobs, progress=progress,
+                               figures=str(out.with_suffix("")))  # fmt: skip
     write_parameter_file(content, out)
-    typer.echo(f"wrote {out}, {out.with_suffix('.csv')} and {out.with_suffix('.md')}")
+    figures = [f for c in letters for f in content["metadata"]["per_class"][c]["figures"]]
+    typer.echo(f"wrote {out}, {out.with_suffix('.csv')}, {out.with_suffix('.md')} and {len(figures)} figures")
     typer.echo(out.with_suffix(".md").read_text())
 
 

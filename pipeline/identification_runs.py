@@ -123,12 +123,24 @@ def class_fit_data(
 
 
 def _identify_one(args: tuple) -> tuple[str, dict, dict]:
-    road_class, duration_s, seed, corner, pop_size, n_gen, progress, position = args
+    road_class, duration_s, seed, corner, pop_size, n_gen, progress, position, figures = args
     data, runs = class_fit_data(road_class, duration_s=duration_s, seed=seed, corner=corner)
     result = identify(
         data, pop_size=pop_size, n_gen=n_gen, seed=seed,
         progress=f"class {road_class}" if progress else None, progress_position=position,
     )  # fmt: skip
+    figure_files = []
+    if figures is not None:
+        from identification.figures import plot_fit, plot_pareto
+
+        pareto = f"{figures}_pareto_{road_class}.png"
+        plot_pareto(result, data, pareto, title=f"class {road_class}")
+        figure_files.append(pareto)
+        wanted = [f"60kmh_{p:g}kPa" for p in (230.0, 130.0)]
+        if road_class == "B" and all(w in data.labels for w in wanted):
+            fig5 = f"{figures}_fig5_B.png"
+            plot_fit(data, result.parameters, [data.labels.index(w) for w in wanted], fig5)
+            figure_files.append(fig5)
     objectives = dict(
         zip(
             [f"rmse_sprung_{x}" for x in data.labels] + [f"rmse_unsprung_{x}" for x in data.labels],
@@ -139,7 +151,7 @@ def _identify_one(args: tuple) -> tuple[str, dict, dict]:
     return (
         road_class,
         result.parameters,
-        {**runs, "objectives_mps2": objectives, "front_size": len(result.front_x)},
+        {**runs, "objectives_mps2": objectives, "front_size": len(result.front_x), "figures": figure_files},
     )
 
 
@@ -153,9 +165,16 @@ def identify_classes(
     corner: str = "fl",
     jobs: int = 1,
     progress: bool = False,
+    figures: str | None = None,
 ) -> dict:
-    """Identify every class in `classes` (one process per class with ``jobs > 1``); return the file."""
-    tasks = [(c, duration_s, seed, corner, pop_size, n_gen, progress, i) for i, c in enumerate(classes)]
+    """Identify every class in `classes` (one process per class with ``jobs > 1``); return the file.
+
+    With `figures` (a path prefix), also draw ``{figures}_pareto_{class}.png`` and, for class B,
+    the Figure 5 analog ``{figures}_fig5_B.png``.
+    """
+    tasks = [
+        (c, duration_s, seed, corner, pop_size, n_gen, progress, i, figures) for i, c in enumerate(classes)
+    ]
     if jobs > 1:
         with ProcessPoolExecutor(max_workers=jobs) as pool:
             results = list(pool.map(_identify_one, tasks))

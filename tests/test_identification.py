@@ -92,6 +92,8 @@ def test_identify_cli_writes_a_loadable_parameter_file(tmp_path, capsys):
     assert all(32e-6 <= g <= 128e-6 for g in levels) and len(set(levels)) == 9  # anywhere in the band
     assert load_modes(out).classes == ("B",)
     assert (tmp_path / "params.csv").is_file() and "| cs | N s/m |" in (tmp_path / "params.md").read_text()
+    for figure in ("params_pareto_B.png", "params_fig5_B.png"):
+        assert (tmp_path / figure).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", figure
 
 
 @pytest.mark.parametrize(
