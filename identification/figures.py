@@ -21,7 +21,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from identification.quarter_car_fit import FitData, IdentificationResult, simulate_accelerations  # noqa: E402
-from pipeline.files import atomic_write  # noqa: E402
+from pipeline.files import save_figure  # noqa: E402
 
 __all__ = ["plot_fit", "plot_pareto"]
 
@@ -50,10 +50,7 @@ def plot_pareto(result: IdentificationResult, data: FitData, path: str | os.Path
     axes[0][0].legend(fontsize=7)
     fig.suptitle(f"Pareto front projections, {title} (eq. 20–21 objectives)", fontsize=10)
     fig.tight_layout()
-    try:
-        atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=100, format="png"))
-    finally:
-        plt.close(fig)
+    save_figure(fig, path, dpi=100)
 
 
 def plot_fit(
@@ -80,7 +77,4 @@ def plot_fit(
         ax.grid(alpha=0.3)
     fig.suptitle("Figure 5 analog: unsprung acceleration, class B road, 60 km/h", fontsize=10)
     fig.tight_layout()
-    try:
-        atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=100, format="png"))
-    finally:
-        plt.close(fig)
+    save_figure(fig, path, dpi=100)

@@ -15,7 +15,7 @@ import pyarrow.parquet as pq
 
 from pipeline.errors import InputError
 
-__all__ = ["atomic_write", "read_parquet_table"]
+__all__ = ["atomic_write", "read_parquet_table", "save_figure"]
 
 
 def atomic_write(path: str | os.PathLike, write: Callable[[str], object]) -> None:
@@ -46,3 +46,13 @@ def read_parquet_table(path: str | os.PathLike, *, what: str) -> pa.Table:
         return pq.read_table(path)
     except (pa.ArrowException, OSError) as error:
         raise InputError(f"{what} {str(path)!r} is not a readable Parquet file ({error})") from None
+
+
+def save_figure(fig, path: str | os.PathLike, *, dpi: int = 100) -> None:
+    """Save a matplotlib figure as PNG atomically, then close it (also on failure)."""
+    import matplotlib.pyplot as plt
+
+    try:
+        atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=dpi, format="png"))
+    finally:
+        plt.close(fig)

@@ -17,7 +17,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from pipeline.files import atomic_write  # noqa: E402
+from pipeline.files import save_figure  # noqa: E402
 from pipeline.iso8608 import CLASSES, class_bounds, displacement_psd  # noqa: E402
 from pipeline.roads import Road  # noqa: E402
 from pipeline.roughness import DEFAULT_FIT_BAND, classify_profile, profile_psd  # noqa: E402
@@ -103,7 +103,4 @@ def plot_road(road: Road, path: str | os.PathLike, *, band: tuple[float, float] 
     ax_g.grid(alpha=0.3)
     ax_g.set_title("ISO 8608 classes A–H shaded (w = 2, ×/÷2 about each class mean)", fontsize=9)
     fig.tight_layout()
-    try:
-        atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=110, format="png"))
-    finally:
-        plt.close(fig)
+    save_figure(fig, path, dpi=110)
