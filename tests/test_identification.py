@@ -91,6 +91,10 @@ def test_identify_cli_writes_a_loadable_parameter_file(tmp_path, capsys):
     levels = [s["gd_n0_m3"] for s in per_class["scenarios"]]
     assert all(32e-6 <= g <= 128e-6 for g in levels) and len(set(levels)) == 9  # anywhere in the band
     assert load_modes(out).classes == ("B",)
+    # the whole pipeline (roads, MuJoCo runs, GA) is seeded: a rerun gives the same parameters
+    again = tmp_path / "again.json"
+    assert main([*argv[:-3], "--out", str(again), "--no-progress"]) == 0
+    assert json.loads(again.read_text())["classes"] == content["classes"]
     assert (tmp_path / "params.csv").is_file() and "| cs | N s/m |" in (tmp_path / "params.md").read_text()
     for figure in ("params_pareto_B.png", "params_fig5_B.png"):
         assert (tmp_path / figure).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", figure
