@@ -15,7 +15,7 @@ import pyarrow.parquet as pq
 
 from pipeline.errors import InputError
 
-__all__ = ["atomic_write", "read_parquet_table", "save_figure"]
+__all__ = ["atomic_write", "package_versions", "read_parquet_table", "save_figure"]
 
 
 def atomic_write(path: str | os.PathLike, write: Callable[[str], object]) -> None:
@@ -56,3 +56,16 @@ def save_figure(fig, path: str | os.PathLike, *, dpi: int = 100) -> None:
         atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=dpi, format="png"))
     finally:
         plt.close(fig)
+
+
+def package_versions(names: tuple[str, ...]) -> dict[str, str]:
+    """Installed version of each package in `names` ("unknown" if absent), for output metadata."""
+    from importlib import metadata
+
+    out = {}
+    for name in names:
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            out[name] = "unknown"
+    return out

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import json
 from concurrent.futures import ProcessPoolExecutor
-from importlib import metadata as importlib_metadata
 from pathlib import Path
 
 import numpy as np
@@ -24,7 +23,7 @@ from estimators.quarter_car import sprung_mass_share
 from identification.quarter_car_fit import DEFAULT_BOUNDS, PARAMETER_NAMES, FitData, identify
 from mjcf.vehicle import CORNERS, load_vehicle
 from pipeline.errors import InputError
-from pipeline.files import atomic_write
+from pipeline.files import atomic_write, package_versions
 from pipeline.iso8608 import CLASSES, class_bounds
 from pipeline.scenario import parse_scenario
 from pipeline.simulator import simulate
@@ -180,12 +179,6 @@ def identify_classes(
             results = list(pool.map(_identify_one, tasks))
     else:
         results = [_identify_one(t) for t in tasks]
-    versions = {}
-    for name in ("suvtwin", "mujoco", "numpy", "pymoo", "numba"):
-        try:
-            versions[name] = importlib_metadata.version(name)
-        except importlib_metadata.PackageNotFoundError:
-            versions[name] = "unknown"
     return {
         "classes": {c: params for c, params, _ in results},
         "metadata": {
@@ -203,7 +196,7 @@ def identify_classes(
             "selection": "non-dominated solution nearest the origin, objectives normalized by ideal/nadir",
             "bounds": {n: list(DEFAULT_BOUNDS[n]) for n in PARAMETER_NAMES},
             "per_class": {c: info for c, _, info in results},
-            "versions": versions,
+            "versions": package_versions(("suvtwin", "mujoco", "numpy", "pymoo", "numba")),
         },
     }
 

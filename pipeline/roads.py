@@ -48,7 +48,6 @@ from __future__ import annotations
 import json
 import os
 from dataclasses import dataclass
-from importlib import metadata
 from pathlib import Path
 
 import numpy as np
@@ -59,7 +58,7 @@ import scipy.fft
 import scipy.signal
 
 from pipeline.errors import InputError
-from pipeline.files import atomic_write, read_parquet_table
+from pipeline.files import atomic_write, package_versions, read_parquet_table
 from pipeline.iso8608 import N0_CYCLES_PER_M, OMEGA0_RAD_PER_M
 from pipeline.road_spec import ObstacleSpec, RoadSpec
 
@@ -356,17 +355,6 @@ def _fade_weight(x: np.ndarray, bounds: np.ndarray, i: int, half_fade: float) ->
     return weight
 
 
-def _versions() -> dict[str, str]:
-    names = ("suvtwin", "numpy", "scipy", "pyarrow")
-    out = {}
-    for name in names:
-        try:
-            out[name] = metadata.version(name)
-        except metadata.PackageNotFoundError:
-            out[name] = "unknown"
-    return out
-
-
 def write_road(road: Road, path: str | os.PathLike) -> None:
     """Write `road` to a Parquet file: columns ``x_m``, ``z_left_m``, ``z_right_m``.
 
@@ -378,7 +366,7 @@ def write_road(road: Road, path: str | os.PathLike) -> None:
     info = {
         "spec": None if road.spec is None else road.spec.model_dump(mode="json"),
         "seed": road.seed,
-        "versions": _versions(),
+        "versions": package_versions(("suvtwin", "numpy", "scipy", "pyarrow")),
     }
     table = table.replace_schema_metadata({_METADATA_KEY: json.dumps(info, sort_keys=True).encode()})
     atomic_write(path, lambda tmp: pq.write_table(table, tmp, compression="zstd"))

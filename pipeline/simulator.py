@@ -20,7 +20,6 @@ from __future__ import annotations
 import json
 import time
 from dataclasses import dataclass
-from importlib import metadata
 from pathlib import Path
 
 import mujoco
@@ -42,11 +41,12 @@ from mjcf.kernel import (
     pack_ids,
     pack_vehicle,
     road_height,
+    step_kernel,
 )
 from mjcf.tire import effective_rolling_radius, vertical_stiffness
 from mjcf.vehicle import CORNERS, load_vehicle
 from pipeline.errors import InputError, RunError
-from pipeline.files import atomic_write, read_parquet_table
+from pipeline.files import atomic_write, package_versions, read_parquet_table
 from pipeline.roads import Road, generate_road
 from pipeline.scenario import END_MARGIN_M, START_MARGIN_M, Scenario
 
@@ -198,8 +198,6 @@ def simulate(scenario: Scenario, *, progress: bool = False) -> SimResult:
     sensordata, qfrc, xfrc, ctrl = data.sensordata, data.qfrc_applied, data.xfrc_applied, data.ctrl
     ids, hf, hdata, vp, tp = inp["ids"], vm.hfield, inp["hdata"], inp["vp"], inp["tp"]
     pressure, speed_ref, steer_cmd, mode = inp["pressure"], inp["speed_ref"], inp["steer_cmd"], inp["mode"]
-    from mjcf.kernel import step_kernel
-
     bar = None
     if progress:
         from tqdm import tqdm
@@ -231,7 +229,7 @@ def simulate(scenario: Scenario, *, progress: bool = False) -> SimResult:
         "road_seed": scenario.road_seed(),
         "noise_seed": scenario.noise_seed(),
         "contact": scenario.contact,
-        "versions": _versions(),
+        "versions": package_versions(("suvtwin", "mujoco", "numpy", "numba", "scipy", "pyarrow")),
         "wall_time_s": wall,
         "total_mass_kg": float(np.sum(model.body_mass)),
     }
@@ -256,16 +254,6 @@ def _output_table(log: np.ndarray, scenario: Scenario) -> pd.DataFrame:
             else:
                 out[f"{c}_{field}"] = raw[f"{c}_{field}"]
     return pd.DataFrame({name: out[name] for name in OUTPUT_COLUMNS})
-
-
-def _versions() -> dict[str, str]:
-    out = {}
-    for name in ("suvtwin", "mujoco", "numpy", "numba", "scipy", "pyarrow"):
-        try:
-            out[name] = metadata.version(name)
-        except metadata.PackageNotFoundError:
-            out[name] = "unknown"
-    return out
 
 
 def write_run(result: SimResult, path: str | Path) -> None:
