@@ -226,7 +226,7 @@ def estimate_pressure(
     speed_mps: npt.ArrayLike,
     road: npt.ArrayLike | None = None,
     settings: EstimatorSettings | None = None,
-    seed: int = 0,
+    seed: int | npt.ArrayLike = 0,
     initial_stiffness: npt.ArrayLike | None = None,
     road_levels: npt.ArrayLike | None = None,
 ) -> PressureEstimate:
@@ -248,8 +248,9 @@ def estimate_pressure(
     road : array_like, shape (B, T), optional
         True road elevation, m (``road_input="true"`` only).
     settings : EstimatorSettings, optional
-    seed : int
-        Seed of the synthetic roads.
+    seed : int or array_like of int (B,)
+        Seed of the synthetic roads: one stream for the batch, or one per run (then each run's
+        estimate is independent of which other runs share the batch).
     initial_stiffness : array_like (B,), optional
         Initial k_t estimate per run, N/m (default from ``settings.pressure_guess_kpa``).
     road_levels : array_like (S,), optional
@@ -287,9 +288,14 @@ def estimate_pressure(
             raise InputError("road_input 'true' needs the road elevation")
         road_in = np.atleast_2d(np.asarray(road, dtype=float))[:, None, None, :]  # (B, 1, 1, T)
     elif road_input == "synthetic":
-        rng = np.random.default_rng(seed)
+        per_run = np.ndim(seed) > 0
+        if per_run and np.shape(seed) != (n_runs,):
+            raise InputError(f"seed: give one int or one per run ({n_runs}), got shape {np.shape(seed)}")
+        rng = None if per_run else np.random.default_rng(seed)
         road_in = np.empty((n_runs, n_modes, 1, n_steps))
         for b in range(n_runs):
+            if per_run:
+                rng = np.random.default_rng(int(np.asarray(seed)[b]))
             for s in range(n_modes):
                 road_in[b, s, 0] = shape_filter_profile(n_steps, speed[b] * dt, gd_n0=levels[s], rng=rng)[0]
     else:
