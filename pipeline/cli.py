@@ -468,6 +468,70 @@ def identify_command(
     typer.echo(out.with_suffix(".md").read_text())
 
 
+@app.command("run")
+def run_command(
+    out: Annotated[Path, typer.Option("--out", help="Output folder (created; re-using it resumes).")] = Path(
+        "results"
+    ),
+    quick: Annotated[
+        bool,
+        typer.Option(
+            "--quick/--full",
+            help="--quick: 40 Monte Carlo runs, GA 100 × 100 (minutes); --full: paper scale, 100 runs, "
+            "GA 100 × 1000 generations.",
+        ),
+    ] = True,
+    jobs: Annotated[int, typer.Option(help="Parallel processes for simulations and estimators (1–64).")] = 2,
+    runs: Annotated[
+        int | None, typer.Option(help="Override the number of Monte Carlo runs (0–10000).")
+    ] = None,
+    seed: Annotated[int | None, typer.Option(help="Override the campaign seed (≥ 0).")] = None,
+    params: Annotated[
+        str | None,
+        typer.Option(
+            help="Skip the identification and use these mode parameters: a JSON file, 'identified' "
+            "(shipped, paper scale) or 'paper' (Table 3)."
+        ),
+    ] = None,
+    config_file: Annotated[
+        Path | None,
+        typer.Option(
+            "--config",
+            help="Campaign settings file (.yaml/.toml/.json) overriding the preset: monte_carlo_runs, "
+            "duration_s, corner, scenarios, estimators, identification {pop_size, n_gen, ...}, seed, ...",
+        ),
+    ] = None,
+    progress: Annotated[bool, typer.Option(help="Show progress bars.")] = True,
+) -> None:
+    """Paper 000's validation campaign end to end: identification, Monte Carlo and scenario runs,
+    estimators, metrics and a self-contained report.html in --out."""
+    import time
+
+    from pipeline.campaign import preset, run_campaign
+
+    if not 1 <= jobs <= 64:
+        raise InputError(f"--jobs must be in [1, 64], got {jobs}")
+    if params is not None and params not in ("identified", "paper") and not Path(params).is_file():
+        raise InputError(f"--params: file {params!r} does not exist (or give 'identified' or 'paper')")
+    overrides = {}
+    if config_file is not None:
+        overrides = _load_mapping(config_file, "--config")
+        if not isinstance(overrides, dict):
+            raise InputError(f"--config: {str(config_file)!r} must hold a mapping of campaign settings")
+    overrides.update({k: v for k, v in {"monte_carlo_runs": runs, "seed": seed, "params_file": params}.items()
+                      if v is not None})  # fmt: skip
+    config = preset("quick" if quick else "full", **overrides)
+    started = time.perf_counter()
+    summary = run_campaign(config, out, jobs=jobs, progress=progress)
+    t = summary["timings"]
+    typer.echo(
+        f"campaign {config.name} ({summary['config_hash']}) done in {time.perf_counter() - started:.0f} s: "
+        f"identification {t['identification_s']:.0f} s, {t['simulated_runs']} runs simulated in "
+        f"{t['simulation_s']:.0f} s, {t['estimates_made']} estimates in {t['estimation_s']:.0f} s"
+    )
+    typer.echo(f"wrote {out / 'report.html'}, {out / 'metrics.csv'}, {out / 'monte_carlo.csv'}")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI with `argv` (default: ``sys.argv[1:]``); return the exit status.
 
@@ -483,6 +547,9 @@ def main(argv: list[str] | None = None) -> int:
     except RunError as error:
         typer.echo(f"suvtwin: error: {error}", err=True)
         return 1
+    except KeyboardInterrupt:
+        typer.echo("suvtwin: interrupted (finished work is kept; run the command again to resume)", err=True)
+        return 130
     except SystemExit as done:
         if done.code is None or isinstance(done.code, int):
             return done.code or 0

@@ -28,7 +28,7 @@ from pipeline.errors import InputError
 from pipeline.files import atomic_write, read_parquet_table
 from pipeline.scoring import run_metrics
 
-__all__ = ["EstimateRun", "estimate_run", "score_estimate", "write_estimate"]
+__all__ = ["EstimateRun", "estimate_run", "linear_corner_model", "score_estimate", "write_estimate"]
 
 _METADATA_KEY = b"suvtwin.estimate"
 PRESSURE_TOLERANCE_KPA = 12.5
@@ -139,15 +139,23 @@ def _common_columns(frame: pd.DataFrame, est) -> dict:
     }
 
 
-def _estimate_joint_run(path, frame, corner, vehicle, ms, mus, dt) -> EstimateRun:
-    """The road-level-free estimator on the corner's linearized physical quarter car."""
+def linear_corner_model(corner: str, sprung_mass: float) -> LinearQuarterCar:
+    """The SUV corner as a linear quarter car: `sprung_mass` (kg), its unsprung mass, its spring rate
+    at the wheel and the mean of the low-speed compression and rebound damping rates."""
+    vehicle = load_vehicle()
     s = vehicle.suspension
-    qc = LinearQuarterCar(
-        sprung_mass=ms,
-        unsprung_mass=float(mus),
-        spring_rate=float(vehicle.spring_rate[CORNERS.index(corner)]),
+    i = CORNERS.index(corner)
+    return LinearQuarterCar(
+        sprung_mass=sprung_mass,
+        unsprung_mass=float(vehicle.unsprung_mass[i]),
+        spring_rate=float(vehicle.spring_rate[i]),
         damping=0.5 * (s.damper_compression_low + s.damper_rebound_low),
     )
+
+
+def _estimate_joint_run(path, frame, corner, vehicle, ms, mus, dt) -> EstimateRun:
+    """The road-level-free estimator on the corner's linearized physical quarter car."""
+    qc = linear_corner_model(corner, ms)
     est = estimate_joint(
         frame[f"{corner}_accel_sprung_mps2"].to_numpy(),
         frame[f"{corner}_accel_unsprung_mps2"].to_numpy(),

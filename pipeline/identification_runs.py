@@ -32,7 +32,9 @@ __all__ = [
     "PAPER_PRESSURES_KPA",
     "PAPER_SPEEDS_KMH",
     "class_fit_data",
+    "identify_class",
     "identify_classes",
+    "parameter_file_content",
     "write_parameter_file",
 ]
 
@@ -179,6 +181,30 @@ def identify_classes(
             results = list(pool.map(_identify_one, tasks))
     else:
         results = [_identify_one(t) for t in tasks]
+    return parameter_file_content(results, pop_size=pop_size, n_gen=n_gen, seed=seed)
+
+
+def identify_class(
+    road_class: str,
+    *,
+    duration_s: float,
+    seed: int,
+    pop_size: int,
+    n_gen: int,
+    corner: str = "fl",
+    progress: bool = False,
+    position: int = 0,
+    figures: str | None = None,
+) -> tuple[str, dict, dict]:
+    """Identify one class: ``(class, parameters, information)``, the pieces
+    :func:`parameter_file_content` assembles (the campaign caches them one class at a time)."""
+    return _identify_one((road_class, duration_s, seed, corner, pop_size, n_gen, progress, position, figures))
+
+
+def parameter_file_content(
+    results: list[tuple[str, dict, dict]], *, pop_size: int, n_gen: int, seed: int
+) -> dict:
+    """The parameter file's content from per-class results of one GA configuration."""
     return {
         "classes": {c: params for c, params, _ in results},
         "metadata": {
