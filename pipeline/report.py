@@ -80,6 +80,13 @@ def _table(frame: pd.DataFrame, *, digits: int = 3) -> str:
     return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
 
 
+def _short(value) -> str:
+    """A value for a caption: floats to 3 significant digits, lists element-wise."""
+    if isinstance(value, list | tuple):
+        return "[" + ", ".join(_short(v) for v in value) + "]"
+    return f"{value:.3g}" if isinstance(value, float) else str(value)
+
+
 # ---------------------------------------------------------------- goals
 def _cell(value: str, ok: bool | None) -> dict:
     return {"value": value, "pass": ok}
@@ -549,9 +556,7 @@ def write_report(
         )
         for s in scen:
             parts.append(f"<h3>{html.escape(s.title)}</h3>")
-            info = ", ".join(
-                f"{k} = {v if not isinstance(v, float) else f'{v:.3g}'}" for k, v in s.info.items()
-            )
+            info = ", ".join(f"{k} = {_short(v)}" for k, v in s.info.items())
             parts.append(f"<p><small>{html.escape(info)}</small></p>")
             if s.name == "non_iso_road":
                 parts.append(_img(_road_psd_figure(s), "road PSD against the ISO bands"))
