@@ -368,6 +368,8 @@ def _road_psd_figure(spec) -> str:
     ax.set_xlabel("spatial frequency n, cycles/m")
     ax.set_ylabel("Gd(n), m³")
     ax.set_xlim(0.01, 10)
+    shown = psd[keep & (n <= 10.0) & (psd > 0)]
+    ax.set_ylim(shown.min() / 10, shown.max() * 100)
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
     fig.tight_layout()
@@ -397,7 +399,7 @@ def _draws_figure(specs: list) -> str:
 # ---------------------------------------------------------------- page
 _CSS = """
 body{font-family:system-ui,sans-serif;max-width:1150px;margin:2em auto;padding:0 1em;color:#222;line-height:1.45}
-table{border-collapse:collapse;margin:0.8em 0;font-size:0.85em}
+table{border-collapse:collapse;margin:0.8em 0;font-size:0.8em}
 th,td{border:1px solid #ccc;padding:3px 6px;text-align:right;vertical-align:top}
 th{background:#f2f2f2} td:first-child,th:first-child{text-align:left}
 table.goals td{text-align:left} td.pass{background:#e6f4e6} td.fail{background:#fbe4e4} td.na{color:#888}
@@ -573,6 +575,8 @@ def write_report(
             "rmse_kpa", "mean_abs_error_after_2s_pct", "inside_2sigma"]  # fmt: skip
     shown = metrics[metrics.kind == "scenario"][cols].copy()
     shown["estimator"] = shown["estimator"].map(LABELS)
+    shown.columns = ["run", "estimator", "true p at end, kPa", "estimate at end, kPa", "converged at, s",
+                     "mean error, kPa", "RMSE, kPa", "mean |error| after 2 s, %", "inside ±2σ"]  # fmt: skip
     parts.append(_table(shown))
     if n_mc:
         mc_rows = metrics[metrics.kind == "monte_carlo"]
