@@ -57,7 +57,7 @@ References
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import numpy.typing as npt
@@ -78,12 +78,29 @@ _CHUNK = 4_000_000  # elements of the (runs, stiffness, frequency) arrays handle
 
 @dataclass(frozen=True)
 class LinearQuarterCar:
-    """Linear quarter car: masses (kg), suspension rate k_s (N/m) and damping c_s (N s/m)."""
+    r"""Linear corner model: masses (kg), suspension rate k_s (N/m) and damping c_s (N s/m).
+
+    The optional fields (defaults: the plain quarter car) describe a vehicle corner:
+
+    - ``tire_damping`` c_t (N s/m): radial tire damping, the road force is
+      :math:`k_t(z_r - z_{us}) + c_t(\dot z_r - \dot z_{us})`.
+    - ``roll_mass`` (kg) and ``anti_roll`` (N/m, wheel-rate equivalent of the bar): the roll-plane
+      model. With independent left and right tracks of equal PSD, the corner's response is half a
+      heave quarter car (``sprung_mass``, k_s) plus half a roll quarter car (``roll_mass``,
+      :math:`k_s + 2k_{arb}`) excited by independent roads, so the signal spectrum is
+      :math:`\tfrac12 S_v(h_H h_H^H + h_R h_R^H)` (rank 2). None: no roll mode.
+    - ``damping_range`` (N s/m): the equivalent linear damping is only known to lie in this range
+      (a digressive damper's slopes); the estimator marginalizes over it (uniform prior).
+    """
 
     sprung_mass: float
     unsprung_mass: float
     spring_rate: float
     damping: float
+    tire_damping: float = 0.0
+    roll_mass: float | None = None
+    anti_roll: float = 0.0
+    damping_range: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -99,20 +116,45 @@ class JointEstimate:
     info: dict
 
 
-def _response(f: np.ndarray, kt: np.ndarray, qc: LinearQuarterCar) -> tuple[np.ndarray, np.ndarray]:
-    """Sprung and unsprung acceleration per unit road velocity, shape broadcast(kt, f)."""
+def _response(
+    f: np.ndarray, kt: np.ndarray, qc: LinearQuarterCar, *, roll: bool = False
+) -> tuple[np.ndarray, np.ndarray]:
+    """Sprung and unsprung acceleration per unit road velocity, shape broadcast(kt, f).
+
+    `roll`: the roll quarter car of the roll-plane model (``roll_mass``, k_s + 2 k_arb).
+    """
     s = 2j * np.pi * f
-    ksc = qc.spring_rate + qc.damping * s
-    a11 = qc.sprung_mass * s**2 + ksc
-    a22 = qc.unsprung_mass * s**2 + ksc + kt
+    ms = qc.roll_mass if roll else qc.sprung_mass
+    ksc = qc.spring_rate + (2.0 * qc.anti_roll if roll else 0.0) + qc.damping * s
+    ktc = kt + qc.tire_damping * s
+    a11 = ms * s**2 + ksc
+    a22 = qc.unsprung_mass * s**2 + ksc + ktc
     det = a11 * a22 - ksc**2
-    zs = ksc * kt / det  # per unit road elevation
-    zu = a11 * kt / det
+    zs = ksc * ktc / det  # per unit road elevation
+    zu = a11 * ktc / det
     return s * zs, s * zu  # acceleration s^2 Z per road velocity s Zr
 
 
+def _gain(f: np.ndarray, kt: np.ndarray, qc: LinearQuarterCar) -> np.ndarray:
+    r"""Signal power along u per unit road-velocity PSD, :math:`u^H M u`, shape broadcast(kt, f).
+
+    Quarter car: :math:`|h|^2`. Roll-plane model: :math:`\tfrac12(|u^H h_H|^2 + |u^H h_R|^2)`.
+    """
+    h1, h2 = _response(f, kt, qc)
+    if qc.roll_mass is None:
+        return np.abs(h1) ** 2 + np.abs(h2) ** 2
+    u1, u2 = _direction(f, qc)
+    g1, g2 = _response(f, kt, qc, roll=True)
+    return 0.5 * (
+        np.abs(np.conj(u1) * h1 + np.conj(u2) * h2) ** 2 + np.abs(np.conj(u1) * g1 + np.conj(u2) * g2) ** 2
+    )
+
+
 def _direction(f: np.ndarray, qc: LinearQuarterCar) -> tuple[np.ndarray, np.ndarray]:
-    """Unit vector u = h/|h| of the road-driven part of [acc_s, acc_us] (independent of k_t), (F,) each."""
+    """Unit vector u = h/|h| of the road-driven part of [acc_s, acc_us] (independent of k_t), (F,) each.
+
+    For the roll-plane model, the heave quarter car's direction (the projection is then the exact
+    likelihood of the projected series, not of the pair)."""
     s = 2j * np.pi * f
     ksc = qc.spring_rate + qc.damping * s
     a11 = qc.sprung_mass * s**2 + ksc
@@ -238,6 +280,7 @@ def estimate_joint(
     pressure_grid_kpa: tuple[float, float, float] = (60.0, 400.0, 1.0),
     level_grid: npt.ArrayLike | None = None,
     fixed_level: float | None = None,
+    damping_points: int = 4,
 ) -> JointEstimate:
     """Estimate k_t (and p) jointly with the road level from the two accelerations.
 
@@ -269,6 +312,9 @@ def estimate_joint(
         minimum and maximum (default 1e-6 to 1e-2).
     fixed_level : float, optional
         Assume this level instead of estimating it (shows the fixed-level bias).
+    damping_points : int
+        If ``qc.damping_range`` is set, the damping is marginalized over this many values evenly
+        spaced in the range (uniform prior); otherwise ``qc.damping`` is used.
 
     Returns
     -------
@@ -303,10 +349,18 @@ def estimate_joint(
     f_lo = band_cycles_per_m[0] * speed[:, None]
     f_hi = np.minimum(band_cycles_per_m[1] * speed[:, None], max_frequency_hz)
 
+    if qc.damping_range is None:
+        models = [qc]
+    else:
+        c_lo, c_hi = qc.damping_range
+        models = [replace(qc, damping=float(c)) for c in np.linspace(c_lo, c_hi, max(int(damping_points), 1))]
+    dampings = np.array([m.damping for m in models])
+
     kt_hat = np.full((n_runs, n_steps), stiffness.mean())
     kt_sig = np.full((n_runs, n_steps), stiffness.std())
     level_hat = np.full((n_runs, n_steps), np.nan)
-    lam_prev = None
+    damping_hat = np.full((n_runs, n_steps), np.nan)
+    lam_prev = [None] * len(models)
     for start in range(max(first, 1), n_steps, every):  # causal: data before `start` only
         m = start if segment is None else segment
         k = start // m
@@ -318,34 +372,37 @@ def estimate_joint(
         if f.size == 0:
             continue
         X = np.fft.rfft(x, axis=-1)[..., inside]  # (2, B, K, F)
-        u1, u2 = _direction(f, qc)
-        y = np.conj(u1) * X[0] + np.conj(u2) * X[1]
-        power = np.mean(np.abs(y) ** 2, axis=1) * (2.0 * dt / m) / noise  # (B, F)
         weight = k * ((f >= f_lo) & (f <= f_hi)).astype(float)
-        h1, h2 = _response(f[None, :], stiffness[:, None], qc)
-        gain = (np.abs(h1) ** 2 + np.abs(h2) ** 2) / noise  # (P, F)
-        lam = np.empty((n_runs, stiffness.size))
+        lam = np.empty((len(models), n_runs, stiffness.size))
         log_marginal = np.empty_like(lam)
-        runs_at_once = max(1, _CHUNK // (stiffness.size * f.size))
-        for b0 in range(0, n_runs, runs_at_once):
-            sl = slice(b0, b0 + runs_at_once)
-            ll, lam[sl], fisher = profile_loglik(
-                power[sl], gain, weight[sl], log_sv_bounds=(bounds[0][sl], bounds[1][sl]),
-                log_sv_start=None if lam_prev is None else lam_prev[sl],
-            )  # fmt: skip
-            # Laplace: ∫ exp(ℓ) dλ ≈ exp(ℓ̂) sqrt(2π/I); a fixed level is a point prior
-            laplace = 0.0 if fixed_level is not None else 0.5 * np.log(np.maximum(fisher, 1e-300))
-            log_marginal[sl] = ll - laplace
-        lam_prev = lam
-        post = np.exp(log_marginal - log_marginal.max(axis=1, keepdims=True))
-        post /= post.sum(axis=1, keepdims=True)
-        mean = post @ stiffness
-        spread = np.sqrt(np.maximum(post @ stiffness**2 - mean**2, 0.0) + grid_var)
-        level = np.exp(np.sum(post * lam, axis=1)) / sv_per_level[:, 0]
+        for c, model in enumerate(models):
+            u1, u2 = _direction(f, model)
+            y = np.conj(u1) * X[0] + np.conj(u2) * X[1]
+            power = np.mean(np.abs(y) ** 2, axis=1) * (2.0 * dt / m) / noise  # (B, F)
+            gain = _gain(f[None, :], stiffness[:, None], model) / noise  # (P, F)
+            runs_at_once = max(1, _CHUNK // (stiffness.size * f.size))
+            for b0 in range(0, n_runs, runs_at_once):
+                sl = slice(b0, b0 + runs_at_once)
+                ll, lam[c, sl], fisher = profile_loglik(
+                    power[sl], gain, weight[sl], log_sv_bounds=(bounds[0][sl], bounds[1][sl]),
+                    log_sv_start=None if lam_prev[c] is None else lam_prev[c][sl],
+                )  # fmt: skip
+                # Laplace: ∫ exp(ℓ) dλ ≈ exp(ℓ̂) sqrt(2π/I); a fixed level is a point prior
+                laplace = 0.0 if fixed_level is not None else 0.5 * np.log(np.maximum(fisher, 1e-300))
+                log_marginal[c, sl] = ll - laplace
+            lam_prev[c] = lam[c]
+        # joint posterior over (damping, stiffness), flat in both
+        post = np.exp(log_marginal - log_marginal.max(axis=(0, 2), keepdims=True))
+        post /= post.sum(axis=(0, 2), keepdims=True)
+        post_kt = post.sum(axis=0)  # (B, P)
+        mean = post_kt @ stiffness
+        spread = np.sqrt(np.maximum(post_kt @ stiffness**2 - mean**2, 0.0) + grid_var)
+        level = np.exp(np.einsum("cbp,cbp->b", post, lam)) / sv_per_level[:, 0]
         stop = min(start + every, n_steps)
         kt_hat[:, start:stop] = mean[:, None]
         kt_sig[:, start:stop] = spread[:, None]
         level_hat[:, start:stop] = level[:, None]
+        damping_hat[:, start:stop] = (post.sum(axis=2).T @ dampings)[:, None]
     return JointEstimate(
         t_s=np.arange(n_steps) * dt,
         stiffness=kt_hat,
@@ -360,5 +417,7 @@ def estimate_joint(
             "min_record_s": min_record_s if segment is None else segment_s,
             "band_cycles_per_m": list(band_cycles_per_m),
             "max_frequency_hz": max_frequency_hz,
+            "damping_grid": dampings.tolist(),
+            "damping_hat_at_end": damping_hat[:, -1].tolist(),  # posterior mean per run, N s/m
         },
     )

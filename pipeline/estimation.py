@@ -23,6 +23,7 @@ import pyarrow.parquet as pq
 from estimators.joint import LinearQuarterCar, estimate_joint
 from estimators.quarter_car import pressure_from_stiffness, sprung_mass_share
 from estimators.tire_pressure import estimate_pressure, load_modes
+from mjcf.tire import TireParams
 from mjcf.vehicle import CORNERS, load_vehicle
 from pipeline.errors import InputError
 from pipeline.files import atomic_write, read_parquet_table
@@ -140,16 +141,33 @@ def _common_columns(frame: pd.DataFrame, est) -> dict:
 
 
 def linear_corner_model(corner: str, sprung_mass: float) -> LinearQuarterCar:
-    """The SUV corner as a linear quarter car: `sprung_mass` (kg), its unsprung mass, its spring rate
-    at the wheel and the mean of the low-speed compression and rebound damping rates."""
+    """The SUV corner as a linear roll-plane corner model for the joint estimator.
+
+    `sprung_mass` (kg) is the heave mode's; the unsprung mass, spring rate at the wheel, tire radial
+    damping and anti-roll rate are the SUV's. The roll mode's sprung mass is the chassis roll inertia
+    over twice the squared half-track of the corner's axle. The digressive damper's equivalent
+    linear damping lies between the means of its high-speed and of its low-speed compression and
+    rebound slopes, depending on the suspension velocity: the estimator marginalizes over that range
+    (``damping`` is the low-speed mean). Measured on 40 MuJoCo runs (classes A-D, 10 s): the plain
+    quarter car overestimated the pressure by 33 kPa, of which the anti-roll bar ~19 kPa and the
+    digressive damper ~13 kPa (bench/joint_mujoco.py)."""
     vehicle = load_vehicle()
     s = vehicle.suspension
     i = CORNERS.index(corner)
+    front = corner.startswith("f")
+    half_track = 0.5 * (vehicle.chassis.track_front if front else vehicle.chassis.track_rear)
     return LinearQuarterCar(
         sprung_mass=sprung_mass,
         unsprung_mass=float(vehicle.unsprung_mass[i]),
         spring_rate=float(vehicle.spring_rate[i]),
         damping=0.5 * (s.damper_compression_low + s.damper_rebound_low),
+        tire_damping=float(TireParams().vertical_damping),
+        roll_mass=float(vehicle.chassis.inertia_roll / (2.0 * half_track**2)),
+        anti_roll=float(s.anti_roll_front if front else s.anti_roll_rear),
+        damping_range=(
+            0.5 * (s.damper_compression_high + s.damper_rebound_high),
+            0.5 * (s.damper_compression_low + s.damper_rebound_low),
+        ),
     )
 
 

@@ -449,7 +449,7 @@ def write_report(
         "quarter car with an artificial road of its class, as the paper does. <i>augmented road</i>: each mode "
         "estimates the road as a shape-filter state with its class's intensity. <i>joint</i>: estimates the "
         "road roughness level together with the stiffness (Whittle likelihood over pressure × level) on the "
-        "corner's linear physical quarter car, with no class assumption. All use the nominal (empty-vehicle) "
+        "corner's linear roll-plane corner model (heave and roll, anti-roll bar, tire damping; damping marginalized over the damper's range), with no class assumption. All use the nominal (empty-vehicle) "
         "sprung mass, also when the car is loaded. The paper's IMM mixing omits the spread-of-means term "
         "and its likelihood uses det(P); we implement the standard IMM.</div>"
     )
@@ -483,7 +483,7 @@ def write_report(
                 "damping, low speed, compression / rebound",
                 f"{s.damper_compression_low:g} / {s.damper_rebound_low:g} N s/m",
             ),
-            ("anti-roll bar front / rear", f"{s.anti_roll_front:g} / {s.anti_roll_rear:g} N m/rad"),
+            ("anti-roll bar front / rear (wheel-rate equivalent)", f"{s.anti_roll_front:g} / {s.anti_roll_rear:g} N/m"),
             (
                 "tire vertical stiffness",
                 "kt(p) = kt0·(1 + PFZ1·(p − p0)/p0), paper 000 eq. 3–4 (kt0 264.7 kN/m at p0 250 kPa)",
