@@ -6,8 +6,8 @@ uniform 130–230 kPa, speed uniform 40–80 km/h (paper 000, Table 4) and the r
 level drawn log-uniformly inside the class band (not at its centre), seeded; the
 front-left corner's accelerometers (0.5 m/s² noise) go to the paper's IMM (modes from
 Table 3, or this SUV's identified parameters) with both road inputs, to its single UKF
-(mode A), and to the road-level-free joint estimator on the corner's linearized
-physical quarter car. Reported per class
+(mode A), and to the road-level-free joint estimator on the corner's linear
+roll-plane model (:func:`pipeline.estimation.linear_corner_model`). Reported per class
 and estimator: the paper's indexes (eq. 23 mean error, eq. 24 error std, eq. 25
 mean σ-bound) of the pressure at 2, 5 and 10 s, in kPa, and the fraction of runs
 whose error is inside ±2σ at the end.
@@ -20,10 +20,11 @@ import sys
 
 import numpy as np
 
-from estimators.joint import LinearQuarterCar, estimate_joint
+from estimators.joint import estimate_joint
 from estimators.quarter_car import sprung_mass_share
 from estimators.tire_pressure import estimate_pressure, load_modes
 from mjcf.vehicle import load_vehicle
+from pipeline.estimation import linear_corner_model
 from pipeline.iso8608 import draw_level_in_class
 from pipeline.scenario import parse_scenario
 from pipeline.scoring import monte_carlo_indexes
@@ -103,11 +104,7 @@ def main(runs_per_class: int = 20, duration: float = 10.0, params: str = "paper"
                 row[name]["mode_probability_at_end"] = (
                     est.mode_probability[:, -1].mean(axis=0).round(3).tolist()
                 )
-        susp = vehicle.suspension
-        qc = LinearQuarterCar(
-            ms, mus, vehicle.spring_rate[0], 0.5 * (susp.damper_compression_low + susp.damper_rebound_low)
-        )
-        est = estimate_joint(acc_s, acc_u, 1e-3, qc=qc, speed_mps=speed)
+        est = estimate_joint(acc_s, acc_u, 1e-3, qc=linear_corner_model("fl", ms), speed_mps=speed)
         row["joint"] = _summary(est, pressure, duration)
         row["joint"]["level_over_truth_at_end"] = (est.road_level[:, -1] / levels).round(2).tolist()
         out["classes"][road_class] = row
