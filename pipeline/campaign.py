@@ -20,9 +20,10 @@ Stages, in order (Brancati & Tufano 2022, §5.2–5.4):
    Monte Carlo indexes (eq. 23–25); then :mod:`pipeline.report` writes ``report.html``.
 
 Caching and resume: every unit of work is one file named by the hash of everything
-that determines it (scenario, model files and package version for a run; the run,
-estimator, parameter file and initial estimate for an estimate; the identification
-settings for a parameter file), written atomically. A re-run reuses finished files;
+that determines it (scenario, code and model files and library versions for a run;
+the run, estimator, parameter file, estimator code and initial estimate for an
+estimate; the identification settings and code for a parameter file), written
+atomically. A re-run reuses finished files;
 an interrupted run resumes where it stopped without redoing or duplicating work.
 Each estimate depends on its own run only (per-run seeds; the batched filters are
 independent across the batch), so a resumed campaign gives the same bytes as an
@@ -171,11 +172,31 @@ def _digest(obj: object, n: int = 12) -> str:
     return hashlib.sha256(json.dumps(obj, sort_keys=True, default=str).encode()).hexdigest()[:n]
 
 
-def _model_fingerprint() -> dict:
-    """What, besides a scenario, decides a ground-truth run: the SUV's files and the code version."""
-    suv = Path(__file__).parents[1] / "mjcf" / "suv"
-    files = {p.name: hashlib.sha256(p.read_bytes()).hexdigest()[:16] for p in sorted(suv.glob("*.toml"))}
-    return {"files": files, "versions": package_versions(("suvtwin", "mujoco", "numpy"))}
+ROOT = Path(__file__).parents[1]
+SIMULATION_SOURCES = ("mjcf", "pipeline/simulator.py", "pipeline/scenario.py", "pipeline/roads.py",
+                      "pipeline/road_spec.py", "pipeline/iso8608.py")  # fmt: skip
+"""What a ground-truth run is made by (besides its scenario)."""
+IDENTIFICATION_SOURCES = SIMULATION_SOURCES + ("identification", "pipeline/identification_runs.py")
+ESTIMATION_SOURCES = ("estimators", "pipeline/campaign.py")
+
+
+def _source_digest(sources: tuple[str, ...]) -> str:
+    """Hash of the code and model files under `sources` (files or folders of the project): results
+    made by other code get other keys, so an upgrade never reuses stale work."""
+    digest = hashlib.sha256()
+    for source in sources:
+        path = ROOT / source
+        files = sorted(path.rglob("*")) if path.is_dir() else [path]
+        for f in files:
+            if f.is_file() and f.suffix in (".py", ".toml", ".xml") and "__pycache__" not in f.parts:
+                digest.update(str(f.relative_to(ROOT)).encode())
+                digest.update(f.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def _model_fingerprint(sources: tuple[str, ...] = SIMULATION_SOURCES) -> dict:
+    """What, besides a scenario, decides a result: the code and model files and the library versions."""
+    return {"code": _source_digest(sources), "versions": package_versions(("suvtwin", "mujoco", "numpy"))}
 
 
 @dataclass(frozen=True)
@@ -412,7 +433,11 @@ def _identification(config: CampaignConfig, out: Path, pool: _Pool, progress: bo
         return path, {"source": str(path), "cached": True, "wall_time_s": 0.0}
     ident = config.identification
     key = _digest(
-        {"identification": ident.model_dump(), "corner": config.corner, "model": _model_fingerprint()}
+        {
+            "identification": ident.model_dump(),
+            "corner": config.corner,
+            "model": _model_fingerprint(IDENTIFICATION_SOURCES),
+        }
     )
     folder = out / "identification" / key
     path = folder / "params.json"
@@ -486,7 +511,12 @@ def run_campaign(config: CampaignConfig, out: str | Path, *, jobs: int = 1, prog
         timings["simulated_runs"] = len(todo)
 
         t0 = time.perf_counter()
-        params_key = _digest(json.loads(Path(params_path).read_text())["classes"])
+        params_key = _digest(
+            {
+                "classes": json.loads(Path(params_path).read_text())["classes"],
+                "code": _model_fingerprint(ESTIMATION_SOURCES),
+            }
+        )
         est_paths: dict[tuple[str, str], Path] = {}
         tasks = []
         for estimator in config.estimators:

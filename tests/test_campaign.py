@@ -210,3 +210,17 @@ def test_identification_is_cached_one_class_at_a_time(tmp_path):
     assert second["timings"]["estimates_made"] == 0  # same parameters, same estimate files
     third = run_campaign(preset("quick", **settings), tmp_path, jobs=1)
     assert third["identification"]["cached"]
+
+
+def test_results_of_other_code_get_other_keys(tmp_path, monkeypatch):
+    import pipeline.campaign as campaign
+
+    (tmp_path / "pkg").mkdir()
+    (tmp_path / "pkg" / "model.py").write_text("K = 1\n")
+    (tmp_path / "pkg" / "notes.txt").write_text("not code\n")
+    monkeypatch.setattr(campaign, "ROOT", tmp_path)
+    first = campaign._source_digest(("pkg",))
+    (tmp_path / "pkg" / "notes.txt").write_text("changed, still not code\n")
+    assert campaign._source_digest(("pkg",)) == first
+    (tmp_path / "pkg" / "model.py").write_text("K = 2\n")
+    assert campaign._source_digest(("pkg",)) != first
