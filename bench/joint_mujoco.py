@@ -1,6 +1,6 @@
 """The joint (road-level-free) estimator on MuJoCo Monte Carlo runs: plain quarter car vs corner model.
 
-Run: ``python bench/joint_mujoco.py [runs_dir]`` (default ``/tmp/fresh/results_full/runs``) — prints
+Run: ``python bench/joint_mujoco.py [runs_dir]`` (default ``results/runs``, from ``suvtwin run``) — prints
 JSON. Reads the ``mc_*.parquet`` runs (front-left corner, noisy accelerometers), classifies each run
 by its road level (ISO 8608 class bounds) and estimates the pressure with
 
@@ -59,7 +59,7 @@ def _summary(t: np.ndarray, error: np.ndarray, sigma: np.ndarray) -> dict:
     return out
 
 
-def main(runs_dir: str = "/tmp/fresh/results_full/runs") -> dict:
+def main(runs_dir: str = "results/runs") -> dict:
     data = _load(runs_dir)
     vehicle = load_vehicle()
     ms = sprung_mass_share(vehicle.chassis.mass, a_opposite=vehicle.chassis.a2, wheelbase=vehicle.wheelbase)
