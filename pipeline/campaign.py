@@ -617,6 +617,10 @@ def score_campaign(
                 "inside_2sigma": m.inside_2sigma,
                 "sigma_end_kpa": float(sig[-1]),
             }
+            level = s.info.get("gd_n0_m3")
+            if "road_level_hat_m3" in est and isinstance(level, float):
+                # the road level the estimator found, over the level the road was made with
+                row["road_level_ratio_end"] = float(est["road_level_hat_m3"].iloc[-1] / level)
             for letter in "ABCD":
                 col = f"mode_prob_{letter}"
                 if col in est:

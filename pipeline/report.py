@@ -588,6 +588,11 @@ def write_report(
                 converged_fraction=("time_to_converge_s", lambda x: float(np.isfinite(x).mean())),
                 mean_error_end_kpa=("error_end_kpa", "mean"),
                 rmse_end_kpa=("error_end_kpa", lambda x: float(np.sqrt(np.mean(np.square(x))))),
+                **(
+                    {"median_level_estimate_over_truth": ("road_level_ratio_end", "median")}
+                    if "road_level_ratio_end" in mc_rows
+                    else {}
+                ),
             )
             .reset_index()
         )
