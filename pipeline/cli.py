@@ -396,9 +396,8 @@ def estimate_command(
     result = estimate_run(run, corner=corner, estimator=estimator.value, params=params,
                           road_input=road_input.value, seed=seed)  # fmt: skip
     write_estimate(result, out)
-    typer.echo(
-        f"wrote {out} ({len(result.table)} samples, corner {corner}, {estimator.value}, {road_input.value})"
-    )
+    what = estimator.value if estimator.value == "joint" else f"{estimator.value}, {road_input.value} road"
+    typer.echo(f"wrote {out} ({len(result.table)} samples, corner {corner}, {what})")
 
 
 @app.command("score")
