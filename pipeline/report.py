@@ -448,7 +448,7 @@ def write_report(
         "<div class='note'><b>How to read the estimators.</b> <i>synthetic road</i>: each IMM mode drives its "
         "quarter car with an artificial road of its class, as the paper does. <i>augmented road</i>: each mode "
         "estimates the road as a shape-filter state with its class's intensity. <i>joint</i>: estimates the "
-        "road roughness level together with the stiffness (Whittle likelihood over pressure × level) on the "
+        "road roughness level and waviness together with the stiffness (Whittle likelihood over pressure × level × waviness) on the "
         "corner's linear roll-plane corner model (heave and roll, anti-roll bar, tire damping; damping marginalized over the damper's range), with no class assumption. All use the nominal (empty-vehicle) "
         "sprung mass, also when the car is loaded. The paper's IMM mixing omits the spread-of-means term "
         "and its likelihood uses det(P); we implement the standard IMM.</div>"
