@@ -32,7 +32,7 @@ import scipy.signal
 from estimators.tire_pressure import load_modes
 from identification.quarter_car_fit import FitData, objectives
 from pipeline.identification_runs import corner_masses, corner_run
-from pipeline.iso8608 import class_bounds
+from pipeline.iso8608 import draw_level_in_class
 from pipeline.scenario import parse_scenario
 from pipeline.simulator import simulate
 
@@ -56,8 +56,7 @@ def structural_floor(seed: int = 99, duration: float = 60.0) -> dict:
     out = {}
     for i, road_class in enumerate("ABCD"):
         rng = np.random.default_rng([seed, i, 1])
-        lower, upper = class_bounds(road_class)
-        level = float(np.exp(rng.uniform(np.log(lower), np.log(upper))))
+        level = draw_level_in_class(road_class, rng)
         scenario = parse_scenario(
             {
                 "duration_s": duration,
@@ -89,8 +88,7 @@ def _held_out(road_class: str, seeds: list[int]) -> FitData:
     runs = []
     for seed in seeds:
         rng = np.random.default_rng([seed, "ABCD".index(road_class)])
-        lower, upper = class_bounds(road_class)
-        level = float(np.exp(rng.uniform(np.log(lower), np.log(upper))))
+        level = draw_level_in_class(road_class, rng)
         runs.append(corner_run((road_class, level, 70.0, 200.0, 10.0, int(rng.integers(0, 2**31)), "fl")))
     return FitData(*(np.array([r[i] for r in runs]) for i in range(4)), ms, mus, 1e-3)
 

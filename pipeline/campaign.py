@@ -63,7 +63,7 @@ from pipeline.identification_runs import (
     parameter_file_content,
     write_parameter_file,
 )
-from pipeline.iso8608 import class_bounds
+from pipeline.iso8608 import draw_level_in_class
 from pipeline.road_spec import format_validation_error
 from pipeline.scenario import END_MARGIN_M, START_MARGIN_M, parse_scenario
 from pipeline.scoring import monte_carlo_indexes, run_metrics
@@ -218,11 +218,6 @@ def _road_length(speed_kmh: float, duration_s: float) -> float:
     return START_MARGIN_M + speed_kmh / 3.6 * duration_s + 3.0 + END_MARGIN_M + 20.0
 
 
-def _level(road_class: str, rng: np.random.Generator) -> float:
-    lower, upper = class_bounds(road_class)
-    return float(np.exp(rng.uniform(np.log(lower), np.log(upper))))
-
-
 def _monte_carlo_spec(config: CampaignConfig, index: int) -> RunSpec:
     """Run `index` of the Monte Carlo: its draws depend on (seed, index) only, so a bigger campaign
     with the same seed shares the smaller one's runs."""
@@ -230,7 +225,7 @@ def _monte_carlo_spec(config: CampaignConfig, index: int) -> RunSpec:
     pressure = float(rng.uniform(*MC_PRESSURE_KPA))
     speed = float(rng.uniform(*MC_SPEED_KMH))
     road_class = MC_CLASSES[int(rng.integers(0, len(MC_CLASSES)))]
-    level = _level(road_class, rng)
+    level = draw_level_in_class(road_class, rng)
     initial = float(np.clip(rng.normal(pressure, config.initial_pressure_sigma_kpa), 80.0, 350.0))
     scenario = {
         "duration_s": config.duration_s,
@@ -248,32 +243,32 @@ def _scenario_spec(config: CampaignConfig, name: str) -> RunSpec:
     rng = np.random.default_rng(np.random.SeedSequence([config.seed, 1, list(SCENARIOS).index(name)]))
     v, duration = SCENARIO_SPEED_KMH, config.duration_s
     length = _road_length(v, duration)
-    chassis_mass = load_vehicle().chassis.mass
-    wheelbase = load_vehicle().wheelbase
+    vehicle = load_vehicle()
+    chassis_mass, wheelbase = vehicle.chassis.mass, vehicle.wheelbase
     pressure: float = SCENARIO_PRESSURE_KPA
     events: list[dict] = []
     load: list[dict] = []
     info: dict = {}
     if name in ("class_A", "class_D"):
         road_class = name[-1]
-        level = _level(road_class, rng)
+        level = draw_level_in_class(road_class, rng)
         segments = [{"length_m": length, "gd_n0": level}]
         info = {"road_class": road_class, "gd_n0_m3": level}
     elif name == "switch_A_to_D":
         # the corner's wheel reaches the class D segment at 5 s (front axle starts one wheelbase
         # ahead of the start margin)
         first = START_MARGIN_M + wheelbase + v / 3.6 * 5.0
-        levels = [_level("A", rng), _level("D", rng)]
+        levels = [draw_level_in_class("A", rng), draw_level_in_class("D", rng)]
         segments = [{"length_m": first, "gd_n0": levels[0]}, {"length_m": length - first, "gd_n0": levels[1]}]
         info = {"road_class": "A→D", "gd_n0_m3": levels, "switch_s": 5.0}
     elif name == "pressure_drop":
-        level = _level("B", rng)
+        level = draw_level_in_class("B", rng)
         segments = [{"length_m": length, "gd_n0": level}]
         pressure = 230.0
         events = [{"tire": config.corner, "start_s": 4.0, "end_s": 5.5, "target_kpa": 180.0}]
         info = {"road_class": "B", "gd_n0_m3": level, "drop_s": [4.0, 5.5]}
     elif name in ("mass_plus_8", "mass_plus_24"):
-        level = _level("B", rng)
+        level = draw_level_in_class("B", rng)
         segments = [{"length_m": length, "gd_n0": level}]
         share = 0.08 if name == "mass_plus_8" else 0.24
         load = [{"mass_kg": share * chassis_mass, "position_m": [0.0, 0.0, 0.0]}]
@@ -282,7 +277,8 @@ def _scenario_spec(config: CampaignConfig, name: str) -> RunSpec:
         # measured roads bend away from w = 2; three segments, none an ISO road
         parts = [(0.35, 1.6, "B"), (0.35, 2.6, "C"), (0.30, 3.0, "B")]
         segments = [
-            {"length_m": share * length, "gd_n0": _level(c, rng), "waviness": w} for share, w, c in parts
+            {"length_m": share * length, "gd_n0": draw_level_in_class(c, rng), "waviness": w}
+            for share, w, c in parts
         ]
         info = {"road_class": "none", "waviness": [p[1] for p in parts]}
     else:
@@ -316,7 +312,7 @@ def _simulate_to(args: tuple[dict, str]) -> str:
 
 def _read_corner(path: str, corner: str) -> dict:
     columns = ["t_s", "speed_mps", f"{corner}_accel_sprung_mps2", f"{corner}_accel_unsprung_mps2"]
-    frame = pq.read_table(path, columns=columns + [f"{corner}_pressure_kpa"]).to_pandas()
+    frame = pq.read_table(path, columns=columns).to_pandas()
     return {
         "t": frame["t_s"].to_numpy(),
         "speed": float(frame["speed_mps"].mean()),

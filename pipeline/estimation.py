@@ -90,7 +90,7 @@ def estimate_run(
     )
     mus = vehicle.unsprung_mass[CORNERS.index(corner)]
     if estimator == "joint":
-        return _estimate_joint_run(path, frame, corner, vehicle, ms, mus, dt)
+        return _estimate_joint_run(path, frame, corner, ms, mus, dt)
     modes = load_modes(params)
     if estimator == "ukf":
         if "A" not in modes.classes:
@@ -171,8 +171,8 @@ def linear_corner_model(corner: str, sprung_mass: float) -> LinearQuarterCar:
     )
 
 
-def _estimate_joint_run(path, frame, corner, vehicle, ms, mus, dt) -> EstimateRun:
-    """The road-level-free estimator on the corner's linearized physical quarter car."""
+def _estimate_joint_run(path, frame, corner, ms, mus, dt) -> EstimateRun:
+    """The road-level-free estimator on the corner's linear roll-plane model (:func:`linear_corner_model`)."""
     qc = linear_corner_model(corner, ms)
     est = estimate_joint(
         frame[f"{corner}_accel_sprung_mps2"].to_numpy(),

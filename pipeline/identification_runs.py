@@ -24,7 +24,7 @@ from identification.quarter_car_fit import DEFAULT_BOUNDS, PARAMETER_NAMES, FitD
 from mjcf.vehicle import CORNERS, load_vehicle
 from pipeline.errors import InputError
 from pipeline.files import atomic_write, package_versions
-from pipeline.iso8608 import CLASSES, class_bounds
+from pipeline.iso8608 import CLASSES, draw_level_in_class
 from pipeline.scenario import parse_scenario
 from pipeline.simulator import simulate
 
@@ -91,11 +91,10 @@ def class_fit_data(
     if corner not in CORNERS:
         raise InputError(f"corner must be one of fl, fr, rl, rr, got {corner!r}")
     rng = np.random.default_rng(_scenario_seeds(road_class, seed))
-    lower, upper = class_bounds(road_class)
     tasks, labels = [], []
     for speed in PAPER_SPEEDS_KMH:
         for pressure in PAPER_PRESSURES_KPA:
-            level = float(np.exp(rng.uniform(np.log(lower), np.log(upper))))
+            level = draw_level_in_class(road_class, rng)
             tasks.append(
                 (road_class, level, speed, pressure, duration_s, int(rng.integers(0, 2**31)), corner)
             )
