@@ -27,9 +27,9 @@ import time  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from estimators.imm import PAPER_TRANSITION  # noqa: E402
-from estimators.quarter_car import QuarterCar, accelerations, process_semi_implicit  # noqa: E402
-from estimators.tire_pressure import EstimatorSettings, estimate_pressure, load_modes  # noqa: E402
+from suvtwin.estimators.imm import PAPER_TRANSITION  # noqa: E402
+from suvtwin.estimators.quarter_car import QuarterCar, accelerations, process_semi_implicit  # noqa: E402
+from suvtwin.estimators.tire_pressure import EstimatorSettings, estimate_pressure, load_modes  # noqa: E402
 
 DT, SPEED, MS, MUS = 1e-3, 60 / 3.6, 466.7, 61.14
 
@@ -57,8 +57,8 @@ def _ours(n_runs: int, n_steps: int, repeats: int = 1, backend: str | None = Non
 
 def _joint(n_runs: int, n_steps: int) -> float:
     """Wall time of the joint (road-level-free) estimator on the SUV corner model, s."""
-    from estimators.joint import estimate_joint
-    from pipeline.estimation import linear_corner_model
+    from suvtwin.estimators.joint import estimate_joint
+    from suvtwin.pipeline.estimation import linear_corner_model
 
     acc_s, acc_u = _data(n_runs, n_steps)
     start = time.perf_counter()

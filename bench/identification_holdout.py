@@ -29,12 +29,12 @@ import numpy as np
 import scipy.optimize
 import scipy.signal
 
-from estimators.tire_pressure import load_modes
-from identification.quarter_car_fit import FitData, objectives
-from pipeline.identification_runs import corner_masses, corner_run
-from pipeline.iso8608 import draw_level_in_class
-from pipeline.scenario import parse_scenario
-from pipeline.simulator import simulate
+from suvtwin.estimators.tire_pressure import load_modes
+from suvtwin.identification.quarter_car_fit import FitData, objectives
+from suvtwin.pipeline.identification_runs import corner_masses, corner_run
+from suvtwin.pipeline.scenario import parse_scenario
+from suvtwin.pipeline.simulator import simulate
+from suvtwin.roads.iso8608 import draw_level_in_class
 
 
 def linear_floor(y: np.ndarray, inputs: list[np.ndarray], fs: float, nperseg: int) -> float:

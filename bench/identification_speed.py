@@ -15,7 +15,7 @@ import json
 import sys
 import time
 
-from pipeline.identification_runs import identify_classes, write_parameter_file
+from suvtwin.pipeline.identification_runs import identify_classes, write_parameter_file
 
 
 def main(mode: str = "quick") -> dict:

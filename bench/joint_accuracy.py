@@ -4,7 +4,7 @@ Usage: ``python bench/joint_accuracy.py [seeds, comma-separated] [duration_s] [s
 (default ``2,11,7,3,5 10``; a `segment_s` runs the Bartlett-segment spectrum instead of the
 whole-record periodogram).
 
-Per batch seed: 20 runs of ``tests.test_tire_pressure._truth`` (linear quarter car, RK4 at
+Per batch seed: 20 runs of ``suvtwin.pipeline.quarter_car_truth.quarter_car_runs`` (linear quarter car, RK4 at
 1 kHz, 60 km/h, 0.5 m/s² noise, pressure uniform 130-230 kPa, road levels inside classes
 A-D); the pressure error's mean and std (kPa) at 2, 5, 10 (and 30) s, the share of samples
 after 4 s with |error| <= 2 sigma, the estimator's wall time, and the Cramér-Rao bound of
@@ -17,20 +17,20 @@ from __future__ import annotations
 import json
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from estimators.joint import N0, LinearQuarterCar, _response, estimate_joint  # noqa: E402
-from estimators.quarter_car import (  # noqa: E402
+from suvtwin.estimators.joint import N0, LinearQuarterCar, _response, estimate_joint
+from suvtwin.estimators.quarter_car import (
     pressure_sigma_from_stiffness_sigma,
     stiffness_from_pressure,
 )
-from tests.test_tire_pressure import CS, DT, KS, MS, MUS, SPEED, _truth  # noqa: E402
+from suvtwin.pipeline.quarter_car_truth import SPEED_MPS as SPEED
+from suvtwin.pipeline.quarter_car_truth import TEST_CORNER, quarter_car_runs
+from suvtwin.pipeline.quarter_car_truth import TIMESTEP_S as DT
 
-QC = LinearQuarterCar(MS, MUS, KS, CS)
+QC = LinearQuarterCar(TEST_CORNER.sprung_mass, TEST_CORNER.unsprung_mass, TEST_CORNER.spring_rate,
+                      TEST_CORNER.damping)  # fmt: skip
 RUNS = 20
 
 
@@ -53,18 +53,10 @@ def cramer_rao_pressure_std(pressure, level, duration, band=(0.05, 1.5), fmax=30
     return float(pressure_sigma_from_stiffness_sigma(np.sqrt(np.linalg.inv(fisher)[0, 0])))
 
 
-def truth_levels(seed):
-    """The road levels `_truth` draws (same generator calls in the same order)."""
-    from pipeline.iso8608 import draw_level_in_class
-
-    rng = np.random.default_rng(seed)
-    rng.uniform(130e3, 230e3, RUNS)
-    return np.array([draw_level_in_class("ABCD"[b % 4], rng) for b in range(RUNS)])
-
-
 def batch(seed, duration, segment_s):
     n_steps = int(round(duration / DT))
-    pressure, _, acc = _truth(RUNS, n_steps, seed=seed)
+    runs = quarter_car_runs(RUNS, n_steps, seed=seed)
+    pressure, acc = runs.pressure, runs.acc
     start = time.perf_counter()
     est = estimate_joint(acc[..., 0], acc[..., 1], DT, qc=QC, speed_mps=SPEED, segment_s=segment_s)
     wall = time.perf_counter() - start
@@ -79,7 +71,7 @@ def batch(seed, duration, segment_s):
     row["coverage_2sigma_after_4s"] = round(
         float(np.mean(np.abs(error[:, after]) <= 2 * est.pressure_sigma_pa[:, after] / 1e3)), 3
     )
-    levels = truth_levels(seed)
+    levels = runs.gd_n0
     bound = [cramer_rao_pressure_std(p, g, duration) for p, g in zip(pressure, levels, strict=True)]
     row[f"cramer_rao_std_at_{duration:g}s_kpa"] = round(float(np.sqrt(np.mean(np.square(bound)))) / 1e3, 1)
     row["wall_s"] = round(wall, 2)

@@ -6,7 +6,7 @@ by its road level (ISO 8608 class bounds) and estimates the pressure with
 
 - ``before``: the plain linear quarter car (k_s, mean low-speed damping), the former
   ``linear_corner_model``;
-- ``after``: :func:`pipeline.estimation.linear_corner_model` (tire damping, roll-plane model with
+- ``after``: :func:`suvtwin.pipeline.estimation.linear_corner_model` (tire damping, roll-plane model with
   the anti-roll bar, damping marginalized over the digressive damper's range).
 
 Nothing is tuned on these runs' true pressures. Reported per class and overall: the error
@@ -23,10 +23,10 @@ import time
 import numpy as np
 import pyarrow.parquet as pq
 
-from estimators.joint import LinearQuarterCar, estimate_joint
-from estimators.quarter_car import sprung_mass_share
-from mjcf.vehicle import load_vehicle
-from pipeline.estimation import linear_corner_model
+from suvtwin.estimators.joint import LinearQuarterCar, estimate_joint
+from suvtwin.estimators.quarter_car import sprung_mass_share
+from suvtwin.mjcf.vehicle import load_vehicle
+from suvtwin.pipeline.estimation import linear_corner_model
 
 _CLASS_BOUNDS = (32e-6, 128e-6, 512e-6)  # m³, ISO 8608 A/B, B/C, C/D boundaries at n0 = 0.1 cycle/m
 

@@ -5,11 +5,12 @@ Parts: ``qc`` (quarter-car truth, default seeds 2,11,7), ``mujoco_non_iso`` (the
 ``non_iso_road`` scenario, simulated), ``mujoco_mc [runs_dir]`` (the campaign's Monte Carlo runs on w = 2
 roads; first existing of ``results/runs``, ``/tmp/final/results_full/runs``). Default: all three.
 
-Quarter-car truth: per batch seed 20 runs like ``tests.test_tire_pressure._truth`` (linear quarter car,
-RK4 5 substeps at 1 kHz, 60 km/h, 0.5 m/s² noise, pressure uniform 130-230 kPa, level log-uniform in
-classes A-D cycling), on roads of waviness drawn uniform in [1.5, 3.0] (``w_uniform``) and on the w = 2
-roads of ``_truth`` itself (``w2``). Estimators: ``before`` = ``waviness=2.0`` (the former model, equal
-to it bit for bit), ``after`` = the default (w = 2 with prior probability 0.8, else uniform in 1.5-3),
+Quarter-car truth: per batch seed 20 runs of ``quarter_car_runs``
+(:mod:`suvtwin.pipeline.quarter_car_truth`: linear quarter car, RK4 5 substeps at 1 kHz, 60 km/h,
+0.5 m/s² noise, pressure uniform 130-230 kPa, level log-uniform in classes A-D cycling), on roads of
+waviness drawn uniform in [1.5, 3.0] (``w_uniform``) and on w = 2 roads (``w2``). Estimators:
+``before`` = ``waviness=2.0`` (the former model, equal to it bit for bit), ``after`` = the default
+(w = 2 with prior probability 0.8, else uniform in 1.5-3),
 ``slope_uniform`` = w uniform in 1.5-3 (``waviness_iso_weight=0``). Reported: the pressure error
 (estimate − truth) mean and std at 5 and 10 s, the share of samples after 4 s within ±2σ, wall time.
 """
@@ -24,20 +25,15 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from suvtwin.estimators.joint import LinearQuarterCar, estimate_joint
+from suvtwin.pipeline.quarter_car_truth import SPEED_MPS as SPEED
+from suvtwin.pipeline.quarter_car_truth import TEST_CORNER, quarter_car_runs
+from suvtwin.pipeline.quarter_car_truth import TIMESTEP_S as DT
 
-from estimators.joint import LinearQuarterCar, estimate_joint  # noqa: E402
-from tests.test_joint import _wavy_truth  # noqa: E402
-from tests.test_tire_pressure import CS, DT, KS, MS, MUS, SPEED, _truth  # noqa: E402
-
-QC = LinearQuarterCar(MS, MUS, KS, CS)
+QC = LinearQuarterCar(TEST_CORNER.sprung_mass, TEST_CORNER.unsprung_mass, TEST_CORNER.spring_rate,
+                      TEST_CORNER.damping)  # fmt: skip
 RUNS = 20
 VARIANTS = {"before": {"waviness": 2.0}, "after": {}, "slope_uniform": {"waviness_iso_weight": 0.0}}
-
-
-def wavy_truth(n_runs, n_steps, seed, waviness=(1.5, 3.0)):
-    """`_truth` on roads of waviness uniform in the range (or a fixed float); returns (p, w, acc)."""
-    return _wavy_truth(n_runs, n_steps, seed, waviness)
 
 
 def _score(est, pressure_kpa, times=(5.0, 10.0)):
@@ -61,10 +57,8 @@ def quarter_car(seeds=(2, 11, 7), duration=10.0):
         errors = {v: [] for v in VARIANTS}
         batches = {}
         for seed in seeds:
-            if road == "w2":
-                pressure, _, acc = _truth(RUNS, n, seed=seed)
-            else:
-                pressure, _, acc = wavy_truth(RUNS, n, seed=seed)
+            runs = quarter_car_runs(RUNS, n, seed=seed, waviness=2.0 if road == "w2" else (1.5, 3.0))
+            pressure, acc = runs.pressure, runs.acc
             rows = {}
             for name, kwargs in VARIANTS.items():
                 start = time.perf_counter()
@@ -87,16 +81,16 @@ def quarter_car(seeds=(2, 11, 7), duration=10.0):
 
 
 def _corner_model():
-    from pipeline.estimation import linear_corner_model
-    from pipeline.identification_runs import corner_masses
+    from suvtwin.pipeline.estimation import linear_corner_model
+    from suvtwin.pipeline.identification_runs import corner_masses
 
     return linear_corner_model("fl", corner_masses("fl")[0])
 
 
 def mujoco_non_iso():
-    from pipeline.campaign import campaign_specs, preset
-    from pipeline.scenario import parse_scenario
-    from pipeline.simulator import simulate
+    from suvtwin.pipeline.campaign import campaign_specs, preset
+    from suvtwin.pipeline.scenario import parse_scenario
+    from suvtwin.pipeline.simulator import simulate
 
     spec = {s.name: s for s in campaign_specs(preset("quick", monte_carlo_runs=0))}["non_iso_road"]
     table = simulate(parse_scenario(spec.scenario)).table

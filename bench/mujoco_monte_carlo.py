@@ -7,7 +7,7 @@ level drawn log-uniformly inside the class band (not at its centre), seeded; the
 front-left corner's accelerometers (0.5 m/s² noise) go to the paper's IMM (modes from
 Table 3, or this SUV's identified parameters) with both road inputs, to its single UKF
 (mode A), and to the road-level-free joint estimator on the corner's linear
-roll-plane model (:func:`pipeline.estimation.linear_corner_model`). Reported per class
+roll-plane model (:func:`suvtwin.pipeline.estimation.linear_corner_model`). Reported per class
 and estimator: the paper's indexes (eq. 23 mean error, eq. 24 error std, eq. 25
 mean σ-bound) of the pressure at 2, 5 and 10 s, in kPa, and the fraction of runs
 whose error is inside ±2σ at the end.
@@ -20,15 +20,15 @@ import sys
 
 import numpy as np
 
-from estimators.joint import estimate_joint
-from estimators.quarter_car import sprung_mass_share
-from estimators.tire_pressure import estimate_pressure, load_modes
-from mjcf.vehicle import load_vehicle
-from pipeline.estimation import linear_corner_model
-from pipeline.iso8608 import draw_level_in_class
-from pipeline.scenario import parse_scenario
-from pipeline.scoring import monte_carlo_indexes
-from pipeline.simulator import simulate
+from suvtwin.estimators.joint import estimate_joint
+from suvtwin.estimators.quarter_car import sprung_mass_share
+from suvtwin.estimators.tire_pressure import estimate_pressure, load_modes
+from suvtwin.mjcf.vehicle import load_vehicle
+from suvtwin.pipeline.estimation import linear_corner_model
+from suvtwin.pipeline.scenario import parse_scenario
+from suvtwin.pipeline.scoring import monte_carlo_indexes
+from suvtwin.pipeline.simulator import simulate
+from suvtwin.roads.iso8608 import draw_level_in_class
 
 
 def _runs(road_class: str, n_runs: int, duration: float, rng: np.random.Generator):

@@ -16,10 +16,10 @@ import sys
 import numpy as np
 from scipy import integrate
 
-from pipeline.iso8608 import CLASSES, class_bounds, class_level, displacement_psd
-from pipeline.road_spec import RoadSpec, SegmentSpec
-from pipeline.roads import SHAPE_FILTER_ALPHA, generate_road, shape_filter_intensity
-from pipeline.roughness import classify_profile
+from suvtwin.roads.iso8608 import CLASSES, class_bounds, class_level, displacement_psd
+from suvtwin.roads.profile import SHAPE_FILTER_ALPHA, generate_road, shape_filter_intensity
+from suvtwin.roads.roughness import classify_profile
+from suvtwin.roads.spec import RoadSpec, SegmentSpec
 
 
 def main(n_seeds: int = 20) -> dict:

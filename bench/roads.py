@@ -12,9 +12,9 @@ import time
 
 import numpy as np
 
-from pipeline.road_spec import RoadSpec, SegmentSpec
-from pipeline.roads import generate_road
-from pipeline.roughness import classify_profile
+from suvtwin.roads.profile import generate_road
+from suvtwin.roads.roughness import classify_profile
+from suvtwin.roads.spec import RoadSpec, SegmentSpec
 
 REPEATS = 20
 

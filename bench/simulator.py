@@ -26,11 +26,11 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
-from mjcf.builder import flat_road_xml
-from mjcf.tire import TireParams
-from mjcf.vehicle import load_vehicle
-from pipeline.scenario import parse_scenario
-from pipeline.simulator import simulate
+from suvtwin.mjcf.builder import flat_road_xml
+from suvtwin.mjcf.tire import TireParams
+from suvtwin.mjcf.vehicle import load_vehicle
+from suvtwin.pipeline.scenario import parse_scenario
+from suvtwin.pipeline.simulator import simulate
 
 
 def _scenario(timestep: float) -> object:

@@ -1,6 +1,6 @@
 r"""Compiled per-step loop of the IMM of UKFs of paper 000 (the ``backend="numba"`` path).
 
-Usual call (what :func:`estimators.tire_pressure.estimate_pressure` does)::
+Usual call (what :func:`suvtwin.estimators.tire_pressure.estimate_pressure` does)::
 
     kt_hat, kt_sig, mode_prob, mode_kt, repairs = run_imm_ukf(
         acc_s, acc_u, dt, road, phi, Q, R, x0, P0, mu0, transition,
@@ -9,7 +9,7 @@ Usual call (what :func:`estimators.tire_pressure.estimate_pressure` does)::
 
 What it computes: for each run (B) and each time step (T), exactly the algorithm of the
 numpy reference path of :func:`~estimators.tire_pressure.estimate_pressure`, built from
-:mod:`estimators.imm` (mixing, mode probabilities) and :mod:`estimators.ukf` (scaled
+:mod:`suvtwin.estimators.imm` (mixing, mode probabilities) and :mod:`suvtwin.estimators.ukf` (scaled
 unscented transform), in the same order of operations — Brancati & Tufano 2022:
 
 - eq. 9–11: IMM mixing, standard form (with the spread-of-means term);
@@ -27,7 +27,7 @@ unscented transform), in the same order of operations — Brancati & Tufano 2022
 The UKF follows filterpy 2.0's order: sigma points from the (mixed) posterior, process
 model, unscented transform + Q, sigma points redrawn from the prior, measurement model,
 update. Sigma-point square roots use a robust Cholesky factorization identical in logic
-to :func:`estimators.ukf.robust_cholesky`: try Cholesky; on failure symmetrize, retry with
+to :func:`suvtwin.estimators.ukf.robust_cholesky`: try Cholesky; on failure symmetrize, retry with
 diagonal jitter 0, 1e-12, 1e-9, 1e-6 × the mean |diagonal|, then clip the eigenvalues
 at 1e-9 × that mean; a run's repair count grows by one for each step in which any of its
 modes needed a repair.
@@ -48,7 +48,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from estimators.ukf import SigmaWeights
+from suvtwin.estimators.ukf import SigmaWeights
 
 __all__ = ["robust_cholesky_batch", "run_imm_ukf"]
 
@@ -82,7 +82,7 @@ def _cholesky(a, L):
 @numba.njit(cache=True)
 def _robust_cholesky(a, L, work):
     """Lower Cholesky factor of `a` into `L`, repairing `a` if it is not positive definite
-    (same ladder as :func:`estimators.ukf.robust_cholesky`). Returns whether it repaired."""
+    (same ladder as :func:`suvtwin.estimators.ukf.robust_cholesky`). Returns whether it repaired."""
     if _cholesky(a, L):
         return False
     n = a.shape[0]
@@ -125,7 +125,7 @@ def _robust_cholesky_batch(a, out, repaired):
 
 def robust_cholesky_batch(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The compiled robust Cholesky on a batch (..., n, n): ``(L, repaired)`` as
-    :func:`estimators.ukf.robust_cholesky` returns them (for tests)."""
+    :func:`suvtwin.estimators.ukf.robust_cholesky` returns them (for tests)."""
     a = np.asarray(a, dtype=float)
     flat = np.ascontiguousarray(a.reshape(-1, a.shape[-2], a.shape[-1]))
     out = np.zeros_like(flat)
@@ -153,7 +153,7 @@ def _sigma_points(x, P, c, sig, A, L, work):
 
 @numba.njit(cache=True)
 def _accelerations(zs, zus, vs, vus, kt, zr, ks, ksnl, cs, csnl, ms, mus, signed):
-    """Eq. 1 (paper 000), as :func:`estimators.quarter_car.accelerations`: m/s²."""
+    """Eq. 1 (paper 000), as :func:`suvtwin.estimators.quarter_car.accelerations`: m/s²."""
     d = zs - zus
     v = vs - vus
     g = abs(v) if signed else v
@@ -407,7 +407,7 @@ def run_imm_ukf(
     transition : (S, S) Markov matrix (eq. 17); unused for one mode.
     ks, ksnl, cs, csnl : (S,) each mode's QC parameters (N/m, N/m³, N s/m, N s²/m²).
     sprung_mass, unsprung_mass : kg.
-    w : sigma-point weights (:func:`estimators.ukf.merwe_weights`).
+    w : sigma-point weights (:func:`suvtwin.estimators.ukf.merwe_weights`).
 
     Returns
     -------

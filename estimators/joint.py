@@ -62,7 +62,7 @@ runs). ``waviness=2.0`` is the former model, bit for bit; the slope roughly doub
 Precision (``bench/joint_accuracy.py``): the pressure-error std is at the
 Cramér–Rao bound of this Gaussian road model, ~13–16 kPa after 10 s at 60 km/h
 with 0.5 m/s² noise (bound 13.4 kPa at 130 kPa, 15.7 kPa at 230 kPa) and
-~8 kPa after 30 s. On the superposition roads of :mod:`pipeline.roads`, whose
+~8 kPa after 30 s. On the superposition roads of :mod:`suvtwin.roads.profile`, whose
 lines have fixed amplitudes, the periodogram scatters less than a Gaussian road's
 once the record resolves the lines, and the error after 30 s is smaller (~5 kPa).
 
@@ -81,12 +81,12 @@ import numpy as np
 import numpy.typing as npt
 import scipy.signal
 
-from estimators.quarter_car import (
+from suvtwin.errors import InputError
+from suvtwin.estimators.quarter_car import (
     pressure_from_stiffness,
     pressure_sigma_from_stiffness_sigma,
     stiffness_from_pressure,
 )
-from pipeline.errors import InputError
 
 __all__ = [
     "JointEstimate",

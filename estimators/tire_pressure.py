@@ -11,7 +11,7 @@ Brancati & Tufano 2022: each mode is the quarter car of eq. 1 with the parameter
 identified for one road class (Table 3, or this project's identification), state
 :math:`[z_s, z_{us}, \dot z_s, \dot z_{us}, k_t]` with :math:`k_t` a random walk
 (eq. 15), measurements the two accelerations (eq. 16), Q of eq. 18, R of eq. 19
-(variances), combined by the IMM (eq. 9–14, standard form: :mod:`estimators.imm`)
+(variances), combined by the IMM (eq. 9–14, standard form: :mod:`suvtwin.estimators.imm`)
 with the Markov matrix of eq. 17. With one mode (class A) it is the paper's
 single-UKF baseline. :math:`k_t \to p` by the inverse of eq. 3–4.
 
@@ -21,7 +21,7 @@ each mode assumes:
 ``"synthetic"``
     the paper, literally: each mode is driven by an artificial road of its class
     (a shape-filter realization at the class level, eq. 5–7 calibrated as in
-    :mod:`pipeline.roads`, seeded);
+    :mod:`suvtwin.roads.profile`, seeded);
 ``"augmented"``
     each mode's state is augmented with the road elevation, a first-order
     shape-filter (eq. 6) state :math:`z_{r,k+1} = \phi z_{r,k} + w`,
@@ -32,23 +32,25 @@ each mode assumes:
 Every array has runs first: accelerations (B, T), outputs (B, T[, S]).
 
 Two implementations of the same filter (``EstimatorSettings.backend``): the compiled
-per-step loop of :mod:`estimators.imm_ukf_kernel` (default), and the numpy reference
-below, batched over runs and modes, built from :mod:`estimators.imm` and
-:mod:`estimators.ukf`; they agree to rounding.
+per-step loop of :mod:`suvtwin.estimators.imm_ukf_kernel` (default), and the numpy reference
+below, batched over runs and modes, built from :mod:`suvtwin.estimators.imm` and
+:mod:`suvtwin.estimators.ukf`; they agree to rounding.
 """
 
 from __future__ import annotations
 
 import json
 from dataclasses import dataclass, field
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
 
-from estimators.imm import PAPER_TRANSITION, imm_mix, imm_probabilities
-from estimators.imm_ukf_kernel import run_imm_ukf
-from estimators.quarter_car import (
+from suvtwin.errors import InputError
+from suvtwin.estimators.imm import PAPER_TRANSITION, imm_mix, imm_probabilities
+from suvtwin.estimators.imm_ukf_kernel import run_imm_ukf
+from suvtwin.estimators.quarter_car import (
     IX_KT,
     KT0,
     P0,
@@ -63,10 +65,9 @@ from estimators.quarter_car import (
     process_semi_implicit,
     stiffness_from_pressure,
 )
-from estimators.ukf import merwe_weights, ukf_predict, ukf_update
-from pipeline.errors import InputError
-from pipeline.iso8608 import class_level
-from pipeline.roads import SHAPE_FILTER_ALPHA, shape_filter_intensity, shape_filter_profile
+from suvtwin.estimators.ukf import merwe_weights, ukf_predict, ukf_update
+from suvtwin.roads.iso8608 import class_level
+from suvtwin.roads.profile import SHAPE_FILTER_ALPHA, shape_filter_intensity, shape_filter_profile
 
 __all__ = [
     "PAPER_TABLE_3",
@@ -122,7 +123,7 @@ def _bank(table: dict, source: str) -> ModeBank:
     return ModeBank(classes=classes, source=source, **cols)
 
 
-IDENTIFIED_FILE = Path(__file__).parents[1] / "identification" / "data" / "suv_fl_paper_scale.json"
+IDENTIFIED_FILE = Path(str(resources.files("suvtwin.identification") / "data" / "suv_fl_paper_scale.json"))
 """QC parameters identified on this project's SUV (front-left corner, classes A–D, NSGA-III
 pop 100 × 1000 generations, seed 1; ``suvtwin identify`` / ``bench/identification_speed.py paper``)."""
 
@@ -166,7 +167,7 @@ class EstimatorSettings:
     alpha, beta, kappa : float
         Sigma-point parameters (alpha = 1: well-conditioned weights).
     damper_law : "signed" or "paper"
-        Non-linear damper term (see :mod:`estimators.quarter_car`).
+        Non-linear damper term (see :mod:`suvtwin.estimators.quarter_car`).
     discretization : "semi-implicit" or "euler"
         Process model: semi-implicit Euler (default), or forward Euler as eq. 15 (the
         paper, literally). Measured on the quarter-car oracle (true road, 20 seeds,
@@ -175,10 +176,10 @@ class EstimatorSettings:
     initial_state_sigma : tuple of 4 floats
         Initial std of z_s, z_us (m) and v_s, v_us (m/s).
     backend : "numba" or "numpy"
-        "numba" (default): the compiled per-step loop of :mod:`estimators.imm_ukf_kernel`
+        "numba" (default): the compiled per-step loop of :mod:`suvtwin.estimators.imm_ukf_kernel`
         (same algorithm and order of operations; ~40x the numpy path for one run, ~3x
         batched over 100 runs: ``bench/estimator_speed.py``). "numpy": the
-        readable reference built from :mod:`estimators.imm` and :mod:`estimators.ukf`,
+        readable reference built from :mod:`suvtwin.estimators.imm` and :mod:`suvtwin.estimators.ukf`,
         batched over runs and modes; the two agree to rounding (tests/test_imm_ukf_kernel.py).
     """
 

@@ -20,8 +20,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from identification.quarter_car_fit import FitData, IdentificationResult, simulate_accelerations  # noqa: E402
-from pipeline.files import save_figure  # noqa: E402
+from suvtwin.files import save_figure  # noqa: E402
+from suvtwin.identification.quarter_car_fit import FitData, IdentificationResult, simulate_accelerations  # noqa: E402
 
 __all__ = ["plot_fit", "plot_pareto"]
 

@@ -15,7 +15,7 @@ mass, and the tire stiffness :math:`k_t(p)` of each scenario (eq. 3–4). Object
 scenario — 18 for the paper's nine (3 speeds × 3 pressures).
 
 The quarter car is driven by the known road under the tire and simulated with the
-discretization the estimator uses (:func:`estimators.quarter_car.process_semi_implicit`,
+discretization the estimator uses (:func:`suvtwin.estimators.quarter_car.process_semi_implicit`,
 road at mid-step), for a whole population × all scenarios in one compiled loop:
 this is the hot loop of the GA (DESIGN.md: numba for the few per-step loops).
 
@@ -41,7 +41,7 @@ from pymoo.optimize import minimize
 from pymoo.util.nds.non_dominated_sorting import NonDominatedSorting
 from pymoo.util.ref_dirs import get_reference_directions
 
-from pipeline.errors import InputError
+from suvtwin.errors import InputError
 
 __all__ = [
     "DEFAULT_BOUNDS",

@@ -48,14 +48,14 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from mjcf.tire import (
+from suvtwin.mjcf.tire import (
     I_UNLOADED_RADIUS,
     effective_rolling_radius,
     tire_forces,
     vertical_force,
     vertical_stiffness,
 )
-from mjcf.vehicle import CORNERS, GRAVITY
+from suvtwin.mjcf.vehicle import CORNERS, GRAVITY
 
 
 def _drop_stale_cache() -> None:
@@ -241,7 +241,7 @@ def pack_ids(ids: dict) -> np.ndarray:
 
 
 def pack_vehicle(vm) -> np.ndarray:
-    """Pack a :class:`mjcf.builder.VehicleModel`'s suspension, tire-extra and driver values."""
+    """Pack a :class:`suvtwin.mjcf.builder.VehicleModel`'s suspension, tire-extra and driver values."""
     v = vm.vehicle
     s, t, d, c = v.suspension, v.tire, v.driver, v.chassis
     out = np.zeros(N_VEHICLE)
@@ -281,7 +281,7 @@ def pack_vehicle(vm) -> np.ndarray:
 def road_height(x, y, hf, hdata):
     """Heightfield elevation at world (x, y), m: bilinear in the grid, clamped at its edges.
 
-    `hf` = (x0, dx, y0, dy, nrow, ncol, z_base, z_scale) from :class:`mjcf.builder.VehicleModel`;
+    `hf` = (x0, dx, y0, dy, nrow, ncol, z_base, z_scale) from :class:`suvtwin.mjcf.builder.VehicleModel`;
     `hdata` the (nrow, ncol) data, height = z_base + data·z_scale.
     """
     nrow, ncol = int(hf[4]), int(hf[5])

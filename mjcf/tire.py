@@ -85,7 +85,7 @@ import numba
 import numpy as np
 import numpy.typing as npt
 
-from pipeline.errors import InputError
+from suvtwin.errors import InputError
 
 __all__ = [
     "TireParams",

@@ -12,11 +12,12 @@ from __future__ import annotations
 
 import tomllib
 from dataclasses import dataclass, fields, replace
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
-from pipeline.errors import InputError
+from suvtwin.errors import InputError
 
 __all__ = [
     "CORNERS",
@@ -39,7 +40,7 @@ CORNERS: tuple[str, ...] = ("fl", "fr", "rl", "rr")
 GRAVITY = 9.81
 """Gravitational acceleration, m/s² (the model's <option gravity>)."""
 
-PARAMETER_FILE = Path(__file__).with_name("suv") / "parameters.toml"
+PARAMETER_FILE = Path(str(resources.files("suvtwin.mjcf") / "suv" / "parameters.toml"))
 
 
 @dataclass(frozen=True)
@@ -97,7 +98,7 @@ class Steering:
 
 @dataclass(frozen=True)
 class TireExtras:
-    """Tire quantities of the vehicle model beside the MF-Tyre coefficients (:mod:`mjcf.tire`)."""
+    """Tire quantities of the vehicle model beside the MF-Tyre coefficients (:mod:`suvtwin.mjcf.tire`)."""
 
     relaxation_length_longitudinal: float
     relaxation_length_lateral: float

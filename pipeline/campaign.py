@@ -5,7 +5,7 @@ Usual call: ``summary = run_campaign(preset("quick"), "results/", jobs=2, progre
 Stages, in order (Brancati & Tufano 2022, §5.2–5.4):
 
 1. **Identification** — the GA fits quarter-car parameters per class A–D
-   (:func:`pipeline.identification_runs.identify_classes`); or a given parameter file.
+   (:func:`suvtwin.pipeline.identification_runs.identify_classes`); or a given parameter file.
 2. **Ground-truth runs** — the Monte Carlo runs (§5.3: pressure uniform 130–230 kPa,
    speed uniform 40–80 km/h, class uniform A–D with the level drawn log-uniformly
    inside the class band, not at its centre; initial pressure estimate drawn from
@@ -16,8 +16,8 @@ Stages, in order (Brancati & Tufano 2022, §5.2–5.4):
    joint estimator (:data:`ESTIMATORS`). All estimators use the *nominal* corner masses
    (paper 000 eq. 2, empty vehicle), also on the runs with extra load: the paper's
    sensitivity test keeps the quarter car's sprung mass fixed.
-4. **Scoring** — per run and estimator (:func:`pipeline.scoring.run_metrics`) and the
-   Monte Carlo indexes (eq. 23–25); then :mod:`pipeline.report` writes ``report.html``.
+4. **Scoring** — per run and estimator (:func:`suvtwin.pipeline.scoring.run_metrics`) and the
+   Monte Carlo indexes (eq. 23–25); then :mod:`suvtwin.pipeline.report` writes ``report.html``.
 
 Caching and resume: every unit of work is one file named by the hash of everything
 that determines it (scenario, code and model files and library versions for a run;
@@ -33,6 +33,7 @@ uninterrupted one.
 from __future__ import annotations
 
 import hashlib
+import importlib.util
 import json
 import time
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
@@ -44,29 +45,29 @@ import pandas as pd
 import pyarrow.parquet as pq
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from estimators.joint import estimate_joint
-from estimators.quarter_car import pressure_from_stiffness, stiffness_from_pressure
-from estimators.tire_pressure import (
+from suvtwin.errors import InputError, RunError
+from suvtwin.estimators.joint import estimate_joint
+from suvtwin.estimators.quarter_car import pressure_from_stiffness, stiffness_from_pressure
+from suvtwin.estimators.tire_pressure import (
     IDENTIFIED_FILE,
     PAPER_TABLE_3,
     EstimatorSettings,
     estimate_pressure,
     load_modes,
 )
-from mjcf.vehicle import load_vehicle
-from pipeline.errors import InputError
-from pipeline.estimation import PRESSURE_TOLERANCE_KPA, linear_corner_model
-from pipeline.files import atomic_write, package_versions
-from pipeline.identification_runs import (
+from suvtwin.files import atomic_write, package_versions
+from suvtwin.mjcf.vehicle import load_vehicle
+from suvtwin.pipeline.estimation import PRESSURE_TOLERANCE_KPA, linear_corner_model
+from suvtwin.pipeline.identification_runs import (
     corner_masses,
     identify_class,
     parameter_file_content,
     write_parameter_file,
 )
-from pipeline.iso8608 import draw_level_in_class
-from pipeline.road_spec import format_validation_error
-from pipeline.scenario import END_MARGIN_M, START_MARGIN_M, parse_scenario
-from pipeline.scoring import monte_carlo_indexes, run_metrics
+from suvtwin.pipeline.scenario import END_MARGIN_M, START_MARGIN_M, parse_scenario
+from suvtwin.pipeline.scoring import monte_carlo_indexes, run_metrics
+from suvtwin.roads.iso8608 import draw_level_in_class
+from suvtwin.roads.spec import format_validation_error
 
 __all__ = [
     "ESTIMATORS",
@@ -172,24 +173,31 @@ def _digest(obj: object, n: int = 12) -> str:
     return hashlib.sha256(json.dumps(obj, sort_keys=True, default=str).encode()).hexdigest()[:n]
 
 
-ROOT = Path(__file__).parents[1]
-SIMULATION_SOURCES = ("mjcf", "pipeline/simulator.py", "pipeline/scenario.py", "pipeline/roads.py",
-                      "pipeline/road_spec.py", "pipeline/iso8608.py")  # fmt: skip
-"""What a ground-truth run is made by (besides its scenario)."""
-IDENTIFICATION_SOURCES = SIMULATION_SOURCES + ("identification", "pipeline/identification_runs.py")
-ESTIMATION_SOURCES = ("estimators", "pipeline/campaign.py")
+SIMULATION_SOURCES = ("suvtwin.mjcf", "suvtwin.pipeline.simulator", "suvtwin.pipeline.scenario",
+                      "suvtwin.roads.profile", "suvtwin.roads.spec", "suvtwin.roads.iso8608")  # fmt: skip
+"""What a ground-truth run is made by (besides its scenario): modules and packages of suvtwin."""
+IDENTIFICATION_SOURCES = (*SIMULATION_SOURCES, "suvtwin.identification",
+                          "suvtwin.pipeline.identification_runs")  # fmt: skip
+ESTIMATION_SOURCES = ("suvtwin.estimators", "suvtwin.pipeline.campaign")
 
 
 def _source_digest(sources: tuple[str, ...]) -> str:
-    """Hash of the code and model files under `sources` (files or folders of the project): results
-    made by other code get other keys, so an upgrade never reuses stale work."""
+    """Hash of the code and model files of `sources` (suvtwin modules or packages, with their
+    package data): results made by other code get other keys, so an upgrade never reuses stale
+    work. Works the same from a source checkout and from an installed wheel."""
     digest = hashlib.sha256()
     for source in sources:
-        path = ROOT / source
-        files = sorted(path.rglob("*")) if path.is_dir() else [path]
+        spec = importlib.util.find_spec(source)
+        if spec is None or spec.origin is None:
+            raise RunError(f"campaign: cannot find the code of {source}")
+        if spec.submodule_search_locations:  # a package: every code and model file under it
+            root = Path(next(iter(spec.submodule_search_locations)))
+            files = sorted(f for f in root.rglob("*") if "__pycache__" not in f.relative_to(root).parts)
+        else:
+            root, files = Path(spec.origin).parent, [Path(spec.origin)]
         for f in files:
-            if f.is_file() and f.suffix in (".py", ".toml", ".xml") and "__pycache__" not in f.parts:
-                digest.update(str(f.relative_to(ROOT)).encode())
+            if f.is_file() and f.suffix in (".py", ".toml", ".xml", ".tir"):
+                digest.update(f"{source}/{f.relative_to(root).as_posix()}".encode())
                 digest.update(f.read_bytes())
     return digest.hexdigest()[:16]
 
@@ -303,7 +311,7 @@ def campaign_specs(config: CampaignConfig) -> list[RunSpec]:
 
 # ---------------------------------------------------------------- workers (run in processes)
 def _simulate_to(args: tuple[dict, str]) -> str:
-    from pipeline.simulator import simulate, write_run
+    from suvtwin.pipeline.simulator import simulate, write_run
 
     scenario, path = args
     write_run(simulate(parse_scenario(scenario, source="campaign scenario")), path)
@@ -558,7 +566,7 @@ def run_campaign(config: CampaignConfig, out: str | Path, *, jobs: int = 1, prog
         "versions": package_versions(("suvtwin", "mujoco", "numpy", "scipy", "pymoo", "numba")),
     }
     summary["timings"] = timings
-    from pipeline.report import write_report
+    from suvtwin.pipeline.report import write_report
 
     t0 = time.perf_counter()
     write_report(out / "report.html", config, specs, metrics, mc_table, series, params_path, summary)

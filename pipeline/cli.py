@@ -2,7 +2,7 @@
 
 Usual call: ``suvtwin road --class C --length 300 --seed 7 --out road.parquet --plot road.png``.
 
-No maths lives here. Bad input raises :class:`pipeline.errors.InputError`
+No maths lives here. Bad input raises :class:`suvtwin.errors.InputError`
 somewhere below; :func:`main` prints its one-line message to stderr and returns 2,
 having written nothing.
 """
@@ -20,9 +20,9 @@ from typing import Annotated
 import typer
 import yaml
 
-from pipeline.errors import InputError, RunError
-from pipeline.iso8608 import CLASSES, class_bounds, level_cycle_to_omega
-from pipeline.road_spec import (
+from suvtwin.errors import InputError, RunError
+from suvtwin.roads.iso8608 import CLASSES, class_bounds, level_cycle_to_omega
+from suvtwin.roads.spec import (
     MAX_SPACING_M,
     MIN_RECOMMENDED_LENGTH_M,
     RoadSpec,
@@ -132,7 +132,7 @@ def road_command(
     ] = None,
 ) -> None:
     """Generate an ISO 8608 random road on two wheel tracks and write it to Parquet."""
-    from pipeline.roads import generate_road, write_road
+    from suvtwin.roads.profile import generate_road, write_road
 
     _check_out(out, "--out", (".parquet",))
     if plot is not None:
@@ -152,7 +152,7 @@ def road_command(
         )
     road = generate_road(road_spec, seed=seed)
     if plot is not None:
-        from pipeline.road_plot import plot_road
+        from suvtwin.roads.plot import plot_road
 
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
@@ -226,8 +226,8 @@ def classify_command(
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of a table.")] = False,
 ) -> None:
     """Fit ISO 8608 level (w = 2 and w free) and class to each track of a road file."""
-    from pipeline.roads import read_road
-    from pipeline.roughness import classify_profile
+    from suvtwin.roads.profile import read_road
+    from suvtwin.roads.roughness import classify_profile
 
     if not 0.0 < band_low < band_high:
         raise InputError(
@@ -285,8 +285,8 @@ def simulate_command(
     progress: Annotated[bool, typer.Option(help="Show a progress bar.")] = True,
 ) -> None:
     """Run the MuJoCo SUV through a scenario and write its ground truth and sensor signals."""
-    from pipeline.scenario import PRESSURE_MAX_KPA, PRESSURE_MIN_KPA, load_scenario, quick_scenario
-    from pipeline.simulator import simulate, write_run
+    from suvtwin.pipeline.scenario import PRESSURE_MAX_KPA, PRESSURE_MIN_KPA, load_scenario, quick_scenario
+    from suvtwin.pipeline.simulator import simulate, write_run
 
     _check_out(out, "--out", (".parquet",))
     short = {"--road-class": road_class, "--speed": speed, "--pressure": pressure, "--duration": duration,
@@ -345,7 +345,7 @@ def render_command(
         raise InputError(f"--fps must be in [1, 120], got {fps}")
     if not (64 <= width <= 1280 and 64 <= height <= 720):
         raise InputError(f"--width/--height must be in [64, 1280] x [64, 720] pixels, got {width} x {height}")
-    from pipeline.render import render_run
+    from suvtwin.pipeline.render import render_run
 
     frames = render_run(run, out, fps=fps, width=width, height=height, camera=camera)
     typer.echo(f"wrote {out} ({frames} frames at {fps} fps)")
@@ -388,7 +388,7 @@ def estimate_command(
     seed: Annotated[int, typer.Option(help="Seed of the synthetic roads (≥ 0).")] = 0,
 ) -> None:
     """Estimate one tire's inflation pressure from its corner's two accelerometers."""
-    from pipeline.estimation import estimate_run, write_estimate
+    from suvtwin.pipeline.estimation import estimate_run, write_estimate
 
     _check_out(out, "--out", (".parquet",))
     if seed < 0:
@@ -407,7 +407,7 @@ def score_command(
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")] = False,
 ) -> None:
     """Score an estimate against the run's true pressure (kPa): convergence, error, sigma coverage."""
-    from pipeline.estimation import score_estimate
+    from suvtwin.pipeline.estimation import score_estimate
 
     metrics = score_estimate(estimate, run)
     if as_json:
@@ -437,7 +437,7 @@ def identify_command(
     progress: Annotated[bool, typer.Option(help="Show a progress bar per class.")] = True,
 ) -> None:
     """Fit quarter-car parameters (cs, csnl, ks, ksnl) per road class to the MuJoCo SUV (paper 000 §5.2)."""
-    from pipeline.identification_runs import identify_classes, write_parameter_file
+    from suvtwin.pipeline.identification_runs import identify_classes, write_parameter_file
 
     _check_out(out, "--out", (".json",))
     letters = tuple(c.strip().upper() for c in classes.split(",") if c.strip())
@@ -506,7 +506,7 @@ def run_command(
     estimators, metrics and a self-contained report.html in --out."""
     import time
 
-    from pipeline.campaign import preset, run_campaign
+    from suvtwin.pipeline.campaign import preset, run_campaign
 
     if not 1 <= jobs <= 64:
         raise InputError(f"--jobs must be in [1, 64], got {jobs}")

@@ -20,14 +20,14 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from estimators.joint import LinearQuarterCar, estimate_joint
-from estimators.quarter_car import pressure_from_stiffness, sprung_mass_share
-from estimators.tire_pressure import estimate_pressure, load_modes
-from mjcf.tire import TireParams
-from mjcf.vehicle import CORNERS, load_vehicle
-from pipeline.errors import InputError
-from pipeline.files import atomic_write, read_parquet_table
-from pipeline.scoring import run_metrics
+from suvtwin.errors import InputError
+from suvtwin.estimators.joint import LinearQuarterCar, estimate_joint
+from suvtwin.estimators.quarter_car import pressure_from_stiffness, sprung_mass_share
+from suvtwin.estimators.tire_pressure import estimate_pressure, load_modes
+from suvtwin.files import atomic_write, read_parquet_table
+from suvtwin.mjcf.tire import TireParams
+from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
+from suvtwin.pipeline.scoring import run_metrics
 
 __all__ = ["EstimateRun", "estimate_run", "linear_corner_model", "score_estimate", "write_estimate"]
 

@@ -6,7 +6,7 @@ For each class (paper 000 §5.2): nine straight runs — speeds 40, 60, 80 km/h 
 pressures 130, 180, 230 kPa — on roads of that class, each road's level drawn
 log-uniformly inside the class band (seeded; real roads sit anywhere in a band).
 The chosen corner's noise-free sprung and unsprung accelerations, the road under its
-tire and its k_t(p) become a :class:`identification.quarter_car_fit.FitData`; the GA
+tire and its k_t(p) become a :class:`suvtwin.identification.quarter_car_fit.FitData`; the GA
 then fits (cs, csnl, ks, ksnl). The result is the parameter file the estimators load
 (``{"classes": {"A": {...}}, "metadata": {...}}``) and a Table-3-like table.
 """
@@ -19,14 +19,14 @@ from pathlib import Path
 
 import numpy as np
 
-from estimators.quarter_car import sprung_mass_share
-from identification.quarter_car_fit import DEFAULT_BOUNDS, PARAMETER_NAMES, FitData, identify
-from mjcf.vehicle import CORNERS, load_vehicle
-from pipeline.errors import InputError
-from pipeline.files import atomic_write, package_versions
-from pipeline.iso8608 import CLASSES, draw_level_in_class
-from pipeline.scenario import parse_scenario
-from pipeline.simulator import simulate
+from suvtwin.errors import InputError
+from suvtwin.estimators.quarter_car import sprung_mass_share
+from suvtwin.files import atomic_write, package_versions
+from suvtwin.identification.quarter_car_fit import DEFAULT_BOUNDS, PARAMETER_NAMES, FitData, identify
+from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
+from suvtwin.pipeline.scenario import parse_scenario
+from suvtwin.pipeline.simulator import simulate
+from suvtwin.roads.iso8608 import CLASSES, draw_level_in_class
 
 __all__ = [
     "PAPER_PRESSURES_KPA",
@@ -131,7 +131,7 @@ def _identify_one(args: tuple) -> tuple[str, dict, dict]:
     )  # fmt: skip
     figure_files = []
     if figures is not None:
-        from identification.figures import plot_fit, plot_pareto
+        from suvtwin.identification.figures import plot_fit, plot_pareto
 
         pareto = f"{figures}_pareto_{road_class}.png"
         plot_pareto(result, data, pareto, title=f"class {road_class}")

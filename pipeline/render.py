@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pipeline.errors import InputError, RunError
+from suvtwin.errors import InputError, RunError
 
 __all__ = ["RenderUnavailable", "render_run"]
 
@@ -61,10 +61,10 @@ def render_run(
     os.environ.setdefault("MUJOCO_GL", "egl")
     import mujoco
 
-    from mjcf.vehicle import CORNERS
-    from pipeline.files import atomic_write
-    from pipeline.scenario import parse_scenario
-    from pipeline.simulator import prepare, read_run
+    from suvtwin.files import atomic_write
+    from suvtwin.mjcf.vehicle import CORNERS
+    from suvtwin.pipeline.scenario import parse_scenario
+    from suvtwin.pipeline.simulator import prepare, read_run
 
     table, meta = read_run(run_path)
     if "scenario" not in meta:

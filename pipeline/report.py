@@ -1,7 +1,7 @@
 """The campaign's report: one self-contained HTML page (figures embedded as PNG).
 
 Usual call: ``write_report("results/report.html", config, specs, metrics, mc_table, series, params, summary)``
-(done by :func:`pipeline.campaign.run_campaign`).
+(done by :func:`suvtwin.pipeline.campaign.run_campaign`).
 
 Sections: what was run; the goals table (each claim of Brancati & Tufano 2022 §5.3–5.4
 against what our estimators did on the open ground truth, pass / falls short); the
@@ -25,10 +25,10 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from estimators.tire_pressure import PAPER_TABLE_3  # noqa: E402
-from mjcf.vehicle import load_vehicle  # noqa: E402
-from pipeline.estimation import PRESSURE_TOLERANCE_KPA  # noqa: E402
-from pipeline.files import atomic_write  # noqa: E402
+from suvtwin.estimators.tire_pressure import PAPER_TABLE_3  # noqa: E402
+from suvtwin.files import atomic_write  # noqa: E402
+from suvtwin.mjcf.vehicle import load_vehicle  # noqa: E402
+from suvtwin.pipeline.estimation import PRESSURE_TOLERANCE_KPA  # noqa: E402
 
 __all__ = ["goal_table", "write_report"]
 
@@ -346,11 +346,11 @@ def _scenario_figure(name: str, series: dict, estimators: tuple[str, ...]) -> st
 
 def _road_psd_figure(spec) -> str:
     """Displacement PSD of a scenario's road (left track) against the ISO class bands (Fig. 12 analog)."""
-    from pipeline.iso8608 import CLASSES, class_bounds, displacement_psd
-    from pipeline.road_spec import RoadSpec
-    from pipeline.roads import generate_road
-    from pipeline.roughness import profile_psd
-    from pipeline.scenario import parse_scenario
+    from suvtwin.pipeline.scenario import parse_scenario
+    from suvtwin.roads.iso8608 import CLASSES, class_bounds, displacement_psd
+    from suvtwin.roads.profile import generate_road
+    from suvtwin.roads.roughness import profile_psd
+    from suvtwin.roads.spec import RoadSpec
 
     scenario = parse_scenario(spec.scenario)
     road = generate_road(RoadSpec.model_validate(spec.scenario["road"]), seed=scenario.road_seed())

@@ -7,7 +7,7 @@ A scenario file (YAML, TOML or JSON) holds the run's duration, integration step,
 output rate, seed, speed (constant or a profile), road (a :class:`RoadSpec` or
 ``"flat"``), tire pressures and pressure events, extra loads, steering, sensor
 noise and the tire–road contact. Units in files are the user's: km/h, kPa, kg, s,
-m, rad; :mod:`pipeline.simulator` converts to SI at the edge. Every problem is
+m, rad; :mod:`suvtwin.pipeline.simulator` converts to SI at the edge. Every problem is
 reported with its field path and allowed range.
 """
 
@@ -22,9 +22,9 @@ import numpy as np
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from mjcf.vehicle import CORNERS, load_vehicle
-from pipeline.errors import InputError
-from pipeline.road_spec import RoadSpec, format_validation_error
+from suvtwin.errors import InputError
+from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
+from suvtwin.roads.spec import RoadSpec, format_validation_error
 
 __all__ = [
     "LoadSpec",

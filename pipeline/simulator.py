@@ -3,9 +3,9 @@
 Usual call: ``result = simulate(load_scenario("s.yaml")); write_run(result, "run.parquet")``.
 
 One run: build the road (seeded from the scenario), compile the SUV on it
-(:func:`mjcf.builder.build_model`), place the car at rest-deflection over the road
+(:func:`suvtwin.mjcf.builder.build_model`), place the car at rest-deflection over the road
 at the set speed, then step MuJoCo with the compiled force kernel
-(:func:`mjcf.kernel.step_kernel`) between ``mj_step1`` and ``mj_step2``. The
+(:func:`suvtwin.mjcf.kernel.step_kernel`) between ``mj_step1`` and ``mj_step2``. The
 step log is decimated to the output rate; the accelerometer signals get white
 noise from the scenario's noise stream. Output: one row per output sample, SI
 units (pressure also in kPa), see :data:`OUTPUT_COLUMNS`.
@@ -28,8 +28,10 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from mjcf.builder import HALF_WIDTH_Y, VehicleModel, build_model
-from mjcf.kernel import (
+from suvtwin.errors import InputError, RunError
+from suvtwin.files import atomic_write, package_versions, read_parquet_table
+from suvtwin.mjcf.builder import HALF_WIDTH_Y, VehicleModel, build_model
+from suvtwin.mjcf.kernel import (
     CORNER_FIELDS,
     GLOBAL_FIELDS,
     LOG_COLUMNS,
@@ -43,12 +45,10 @@ from mjcf.kernel import (
     road_height,
     step_kernel,
 )
-from mjcf.tire import effective_rolling_radius, vertical_stiffness
-from mjcf.vehicle import CORNERS, load_vehicle
-from pipeline.errors import InputError, RunError
-from pipeline.files import atomic_write, package_versions, read_parquet_table
-from pipeline.roads import Road, generate_road
-from pipeline.scenario import END_MARGIN_M, START_MARGIN_M, Scenario
+from suvtwin.mjcf.tire import effective_rolling_radius, vertical_stiffness
+from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
+from suvtwin.pipeline.scenario import END_MARGIN_M, START_MARGIN_M, Scenario
+from suvtwin.roads.profile import Road, generate_road
 
 __all__ = ["OUTPUT_COLUMNS", "SimResult", "SimulationError", "prepare", "read_run", "simulate", "write_run"]
 

@@ -14,13 +14,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from estimators.tire_pressure import estimate_pressure, load_modes
-from pipeline.campaign import SCENARIOS, campaign_specs, preset, run_campaign
-from pipeline.cli import main
-from pipeline.errors import InputError
-from pipeline.iso8608 import class_bounds, class_level
-from pipeline.scenario import parse_scenario
-from pipeline.simulator import simulate
+from suvtwin.errors import InputError
+from suvtwin.estimators.tire_pressure import estimate_pressure, load_modes
+from suvtwin.pipeline.campaign import SCENARIOS, campaign_specs, preset, run_campaign
+from suvtwin.pipeline.cli import main
+from suvtwin.pipeline.scenario import parse_scenario
+from suvtwin.pipeline.simulator import simulate
+from suvtwin.roads.iso8608 import class_bounds, class_level
 
 SMALL = dict(
     monte_carlo_runs=3,
@@ -153,8 +153,8 @@ def test_a_killed_campaign_resumes_to_the_uninterrupted_result(finished, tmp_pat
     config.write_text(json.dumps({**SMALL, "scenarios": list(SMALL["scenarios"]),
                                   "estimators": list(SMALL["estimators"])}))  # fmt: skip
     resumed = tmp_path / "resumed"
-    argv = [sys.executable, "-m", "pipeline.cli", "run", "--out", str(resumed), "--config", str(config),
-            "--jobs", "1", "--no-progress"]  # fmt: skip
+    argv = [sys.executable, "-m", "suvtwin.pipeline.cli", "run", "--out", str(resumed),
+            "--config", str(config), "--jobs", "1", "--no-progress"]  # fmt: skip
     quiet = dict(stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     proc = subprocess.Popen(argv, start_new_session=True, **quiet)
     end = time.monotonic() + 300
@@ -213,14 +213,19 @@ def test_identification_is_cached_one_class_at_a_time(tmp_path):
 
 
 def test_results_of_other_code_get_other_keys(tmp_path, monkeypatch):
-    import pipeline.campaign as campaign
+    import suvtwin.pipeline.campaign as campaign
 
-    (tmp_path / "pkg").mkdir()
-    (tmp_path / "pkg" / "model.py").write_text("K = 1\n")
-    (tmp_path / "pkg" / "notes.txt").write_text("not code\n")
-    monkeypatch.setattr(campaign, "ROOT", tmp_path)
-    first = campaign._source_digest(("pkg",))
-    (tmp_path / "pkg" / "notes.txt").write_text("changed, still not code\n")
-    assert campaign._source_digest(("pkg",)) == first
-    (tmp_path / "pkg" / "model.py").write_text("K = 2\n")
-    assert campaign._source_digest(("pkg",)) != first
+    pkg = tmp_path / "digest_probe_pkg"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("")
+    (pkg / "model.py").write_text("K = 1\n")
+    (pkg / "notes.txt").write_text("not code\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    first = campaign._source_digest(("digest_probe_pkg",))
+    (pkg / "notes.txt").write_text("changed, still not code\n")
+    assert campaign._source_digest(("digest_probe_pkg",)) == first
+    (pkg / "model.py").write_text("K = 2\n")
+    assert campaign._source_digest(("digest_probe_pkg",)) != first
+    assert campaign._source_digest(("digest_probe_pkg.model",)) != campaign._source_digest(
+        ("digest_probe_pkg",)
+    )

@@ -11,8 +11,8 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
-from pipeline.cli import main
-from pipeline.roads import read_road
+from suvtwin.pipeline.cli import main
+from suvtwin.roads.profile import read_road
 
 
 def test_road_then_classify(tmp_path, capsys):

@@ -7,7 +7,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
-from pipeline.cli import main
+from suvtwin.pipeline.cli import main
 
 
 @pytest.fixture(scope="module")

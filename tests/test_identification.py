@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from estimators.quarter_car import QuarterCar, accelerations, process_semi_implicit
-from identification.quarter_car_fit import FitData, identify, objectives, select_compromise
-from pipeline.errors import InputError
-from pipeline.road_spec import RoadSpec, SegmentSpec
-from pipeline.roads import generate_road
+from suvtwin.errors import InputError
+from suvtwin.estimators.quarter_car import QuarterCar, accelerations, process_semi_implicit
+from suvtwin.identification.quarter_car_fit import FitData, identify, objectives, select_compromise
+from suvtwin.roads.profile import generate_road
+from suvtwin.roads.spec import RoadSpec, SegmentSpec
 
 DT, MS, MUS = 1e-3, 466.7, 61.14
 TRUE = {"cs": 2500.0, "csnl": 900.0, "ks": 40000.0, "ksnl": 6.0e5}
@@ -77,8 +77,8 @@ def test_bad_fit_data():
 def test_identify_cli_writes_a_loadable_parameter_file(tmp_path, capsys):
     import json
 
-    from estimators.tire_pressure import load_modes
-    from pipeline.cli import main
+    from suvtwin.estimators.tire_pressure import load_modes
+    from suvtwin.pipeline.cli import main
 
     out = tmp_path / "params.json"
     argv = ["identify", "--classes", "B", "--generations", "3", "--pop", "8", "--duration", "1",
@@ -113,7 +113,7 @@ def test_identify_cli_writes_a_loadable_parameter_file(tmp_path, capsys):
     ],
 )
 def test_identify_cli_bad_input(tmp_path, capsys, args, message):
-    from pipeline.cli import main
+    from suvtwin.pipeline.cli import main
 
     out = tmp_path / "params.json"
     assert main(["identify", *args, "--out", str(out)]) == 2

@@ -4,9 +4,15 @@ import numpy as np
 import pytest
 from filterpy.kalman import IMMEstimator, MerweScaledSigmaPoints, UnscentedKalmanFilter
 
-from estimators.imm import PAPER_TRANSITION, imm_combine, imm_mix, imm_probabilities
-from estimators.quarter_car import QuarterCar, accelerations, measurement_noise, process_euler, process_noise
-from estimators.ukf import merwe_weights, ukf_predict, ukf_update
+from suvtwin.estimators.imm import PAPER_TRANSITION, imm_combine, imm_mix, imm_probabilities
+from suvtwin.estimators.quarter_car import (
+    QuarterCar,
+    accelerations,
+    measurement_noise,
+    process_euler,
+    process_noise,
+)
+from suvtwin.estimators.ukf import merwe_weights, ukf_predict, ukf_update
 
 DT = 1e-3
 # Brancati & Tufano 2022, Table 3 (classes A-D): cs, csnl, ks, ksnl

@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from estimators.imm_ukf_kernel import robust_cholesky_batch
-from estimators.quarter_car import QuarterCar, simulate_quarter_car, stiffness_from_pressure
-from estimators.tire_pressure import EstimatorSettings, estimate_pressure, load_modes
-from estimators.ukf import robust_cholesky
-from pipeline.errors import InputError
+from suvtwin.errors import InputError
+from suvtwin.estimators.imm_ukf_kernel import robust_cholesky_batch
+from suvtwin.estimators.quarter_car import QuarterCar, simulate_quarter_car, stiffness_from_pressure
+from suvtwin.estimators.tire_pressure import EstimatorSettings, estimate_pressure, load_modes
+from suvtwin.estimators.ukf import robust_cholesky
 
 DT, MS, MUS = 1e-3, 466.7, 61.14
 RTOL = 1e-8  # rounding only: BLAS/LAPACK and the loops sum in different orders; measured <= ~1e-8

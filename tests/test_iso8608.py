@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from pipeline.errors import InputError
-from pipeline.iso8608 import (
+from suvtwin.errors import InputError
+from suvtwin.roads.iso8608 import (
     CLASSES,
     class_bounds,
     class_level,

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from estimators.joint import (
+from suvtwin.estimators.joint import (
     LinearQuarterCar,
     _direction,
     _response,
@@ -13,18 +13,23 @@ from estimators.joint import (
     profile_loglik_slope,
     whittle_loglik,
 )
-from estimators.quarter_car import QuarterCar, simulate_quarter_car, stiffness_from_pressure
-from pipeline.iso8608 import draw_level_in_class
-from pipeline.road_spec import RoadSpec, SegmentSpec
-from pipeline.roads import generate_road
-from tests.test_tire_pressure import CS, DT, KS, MS, MUS, SPEED, _truth
+from suvtwin.estimators.quarter_car import simulate_quarter_car, stiffness_from_pressure
+from suvtwin.pipeline.quarter_car_truth import SPEED_MPS, TEST_CORNER, TIMESTEP_S, quarter_car_runs
+from suvtwin.roads.iso8608 import draw_level_in_class
+from suvtwin.roads.profile import generate_road
+from suvtwin.roads.spec import RoadSpec, SegmentSpec
+
+DT, SPEED = TIMESTEP_S, SPEED_MPS
+MS, MUS, KS, CS = (TEST_CORNER.sprung_mass, TEST_CORNER.unsprung_mass, TEST_CORNER.spring_rate,
+                   TEST_CORNER.damping)  # fmt: skip
 
 QC = LinearQuarterCar(MS, MUS, KS, CS)
 
 
 def test_joint_estimator_is_unbiased_with_an_honest_sigma():
     # 20 runs, true pressure uniform 130-230 kPa, road level anywhere in classes A-D, 10 s at 60 km/h
-    pressure, _, acc = _truth(20, 10000, seed=2)
+    runs = quarter_car_runs(20, 10000, seed=2)
+    pressure, acc = runs.pressure, runs.acc
     est = estimate_joint(acc[..., 0], acc[..., 1], DT, qc=QC, speed_mps=SPEED)
     error = est.pressure_pa - pressure[:, None]
     at_10s = error[:, -1]
@@ -59,7 +64,7 @@ def _one_level_runs(level, n_runs=4, seed=5):
     x0 = np.zeros((n_runs, 5))
     x0[:, 0] = x0[:, 1] = roads[:, 0]
     x0[:, 4] = stiffness_from_pressure(180e3)
-    _, acc = simulate_quarter_car(x0, roads, QuarterCar(MS, MUS, KS, 0.0, CS, 0.0), DT, substeps=5)
+    _, acc = simulate_quarter_car(x0, roads, TEST_CORNER, DT, substeps=5)
     return acc + rng.normal(0.0, 0.5, acc.shape)
 
 
@@ -102,9 +107,8 @@ def test_projected_likelihood_equals_the_2x2_whittle_likelihood():
 
 def _mujoco_runs(n_per_class: int, seed: int, duration: float = 10.0):
     """Short MuJoCo runs of the SUV (front-left corner), classes A-D, pressure 130-230 kPa, 40-80 km/h."""
-    from pipeline.iso8608 import draw_level_in_class
-    from pipeline.scenario import parse_scenario
-    from pipeline.simulator import simulate
+    from suvtwin.pipeline.scenario import parse_scenario
+    from suvtwin.pipeline.simulator import simulate
 
     rng = np.random.default_rng(seed)
     acc_s, acc_u, pressure, speed = [], [], [], []
@@ -126,7 +130,7 @@ def _mujoco_runs(n_per_class: int, seed: int, duration: float = 10.0):
 def test_corner_model_removes_the_bias_on_mujoco_truth():
     # the plain quarter car overestimates the pressure on the MuJoCo SUV (anti-roll bar, digressive
     # damper); the roll-plane corner model with the damping marginalized does not
-    from pipeline.estimation import linear_corner_model
+    from suvtwin.pipeline.estimation import linear_corner_model
 
     acc_s, acc_u, pressure, speed = _mujoco_runs(6, seed=11)
     after = linear_corner_model("fl", 466.7)
@@ -140,33 +144,6 @@ def test_corner_model_removes_the_bias_on_mujoco_truth():
     assert errors["before"].mean() > 20.0
     assert abs(errors["after"].mean()) < 12.0
     assert errors["after"].std() < 20.0
-
-
-def _wavy_truth(n_runs, n_steps, seed, waviness=(1.5, 3.0)):
-    """`_truth` on roads of waviness `waviness` (a value, or a range drawn uniformly): (p, w, acc)."""
-    rng = np.random.default_rng(seed)
-    pressure = rng.uniform(130e3, 230e3, n_runs)
-    w = np.full(n_runs, float(waviness)) if np.ndim(waviness) == 0 else rng.uniform(*waviness, n_runs)
-    roads = np.array(
-        [
-            generate_road(
-                RoadSpec(
-                    segments=[
-                        SegmentSpec(length_m=SPEED * n_steps * DT + 5, waviness=float(w[b]),
-                                    gd_n0=draw_level_in_class("ABCD"[b % 4], rng))
-                    ],
-                    spacing_m=SPEED * DT / 1.0001,
-                ),
-                seed=seed * 100 + b,
-            ).z[0][:n_steps]
-            for b in range(n_runs)
-        ]
-    )  # fmt: skip
-    x0 = np.zeros((n_runs, 5))
-    x0[:, 0] = x0[:, 1] = roads[:, 0]
-    x0[:, 4] = stiffness_from_pressure(pressure)
-    _, acc = simulate_quarter_car(x0, roads, QuarterCar(MS, MUS, KS, 0.0, CS, 0.0), DT, substeps=5)
-    return pressure, w, acc + rng.normal(0.0, 0.5, acc.shape)
 
 
 def test_slope_profile_finds_the_grid_maximum():
@@ -196,7 +173,8 @@ def test_waviness_estimate_removes_the_non_iso_road_bias():
     # +2 to +34 (seed 1: +2); w = 2.8 before -91 to -117, after -19 to +7 (seed 1: -19). A batch mean's
     # standard error is ~8 kPa; at w = 1.6 part of the bias stays (w is estimated 1.63-1.83 there)
     for w in (1.6, 2.8):
-        pressure, _, acc = _wavy_truth(8, 10000, seed=1, waviness=w)
+        runs = quarter_car_runs(8, 10000, seed=1, waviness=w)
+        pressure, acc = runs.pressure, runs.acc
         errors = {}
         for name, kwargs in (("before", {"waviness": 2.0}), ("after", {})):
             est = estimate_joint(acc[..., 0], acc[..., 1], DT, qc=QC, speed_mps=SPEED, **kwargs)

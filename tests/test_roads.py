@@ -8,9 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import integrate
 
-from pipeline.iso8608 import CLASSES, class_bounds, class_level, displacement_psd
-from pipeline.road_spec import ObstacleSpec, RoadSpec, SegmentSpec
-from pipeline.roads import (
+from suvtwin.roads.iso8608 import CLASSES, class_bounds, class_level, displacement_psd
+from suvtwin.roads.profile import (
     SHAPE_FILTER_ALPHA,
     generate_road,
     obstacle_profile,
@@ -20,7 +19,8 @@ from pipeline.roads import (
     superposition_profile,
     write_road,
 )
-from pipeline.roughness import classify_profile, fit_iso, profile_psd
+from suvtwin.roads.roughness import classify_profile, fit_iso, profile_psd
+from suvtwin.roads.spec import ObstacleSpec, RoadSpec, SegmentSpec
 
 METHODS = ("shape-filter", "superposition")
 N_SEEDS = 20

@@ -5,7 +5,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from pipeline.scoring import monte_carlo_indexes, run_metrics
+from suvtwin.pipeline.scoring import monte_carlo_indexes, run_metrics
 
 
 def test_monte_carlo_indexes_by_hand():

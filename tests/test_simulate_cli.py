@@ -8,11 +8,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mjcf.vehicle import CORNERS
-from pipeline.cli import main
-from pipeline.errors import InputError
-from pipeline.scenario import load_scenario, parse_scenario
-from pipeline.simulator import OUTPUT_COLUMNS, read_run
+from suvtwin.errors import InputError
+from suvtwin.mjcf.vehicle import CORNERS
+from suvtwin.pipeline.cli import main
+from suvtwin.pipeline.scenario import load_scenario, parse_scenario
+from suvtwin.pipeline.simulator import OUTPUT_COLUMNS, read_run
 
 SCENARIO_YAML = """\
 duration_s: 2.0
@@ -176,7 +176,7 @@ def test_render_writes_a_video_or_says_why_not(tmp_path):
     assert main(argv) == 0
     video = tmp_path / "run.mp4"
     env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
-    code = "import sys; from pipeline.cli import main; sys.exit(main(sys.argv[1:]))"
+    code = "import sys; from suvtwin.pipeline.cli import main; sys.exit(main(sys.argv[1:]))"
     done = subprocess.run(
         [sys.executable, "-c", code, "render", str(run), "--out", str(video), "--fps", "10",
          "--width", "320", "--height", "192"],

@@ -11,8 +11,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-import mjcf.tire as tire
-from mjcf.tire import (
+import suvtwin.mjcf.tire as tire
+from suvtwin.errors import InputError
+from suvtwin.mjcf.tire import (
     TireParams,
     effective_rolling_radius,
     pressure_from_stiffness,
@@ -21,7 +22,6 @@ from mjcf.tire import (
     vertical_force,
     vertical_stiffness,
 )
-from pipeline.errors import InputError
 
 P = TireParams()
 TP = P.to_array()

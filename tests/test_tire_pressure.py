@@ -5,55 +5,26 @@ import json
 import numpy as np
 import pytest
 
-from estimators.quarter_car import QuarterCar, simulate_quarter_car, stiffness_from_pressure
-from estimators.tire_pressure import (
+from suvtwin.errors import InputError
+from suvtwin.estimators.tire_pressure import (
     PAPER_TABLE_3,
     EstimatorSettings,
     ModeBank,
     estimate_pressure,
     load_modes,
 )
-from pipeline.errors import InputError
-from pipeline.iso8608 import draw_level_in_class
-from pipeline.road_spec import RoadSpec, SegmentSpec
-from pipeline.roads import generate_road
+from suvtwin.pipeline.quarter_car_truth import SPEED_MPS, TEST_CORNER, TIMESTEP_S, quarter_car_runs
 
-DT, SPEED = 1e-3, 60 / 3.6
-MS, MUS, KS, CS = 466.7, 61.14, 32000.0, 2200.0
+DT, SPEED = TIMESTEP_S, SPEED_MPS
+MS, MUS, KS, CS = (TEST_CORNER.sprung_mass, TEST_CORNER.unsprung_mass, TEST_CORNER.spring_rate,
+                   TEST_CORNER.damping)  # fmt: skip
 LINEAR = ModeBank(("X",), np.array([CS]), np.array([0.0]), np.array([KS]), np.array([0.0]), "truth")
-
-
-def _truth(n_runs, n_steps, seed):
-    """Linear QC integrated finely (RK4, 5 substeps) on roads anywhere in classes A-D, with
-    0.5 m/s^2 accelerometer noise; true pressure uniform 130-230 kPa."""
-    rng = np.random.default_rng(seed)
-    pressure = rng.uniform(130e3, 230e3, n_runs)
-    roads = np.array(
-        [
-            generate_road(
-                RoadSpec(
-                    segments=[
-                        SegmentSpec(
-                            length_m=SPEED * n_steps * DT + 5, gd_n0=draw_level_in_class("ABCD"[b % 4], rng)
-                        )
-                    ],
-                    spacing_m=SPEED * DT / 1.0001,
-                ),
-                seed=seed * 100 + b,
-            ).z[0][:n_steps]
-            for b in range(n_runs)
-        ]
-    )
-    x0 = np.zeros((n_runs, 5))
-    x0[:, 0] = x0[:, 1] = roads[:, 0]
-    x0[:, 4] = stiffness_from_pressure(pressure)
-    _, acc = simulate_quarter_car(x0, roads, QuarterCar(MS, MUS, KS, 0.0, CS, 0.0), DT, substeps=5)
-    return pressure, roads, acc + rng.normal(0.0, 0.5, acc.shape)
 
 
 @pytest.fixture(scope="module")
 def truth():
-    return _truth(20, 5000, seed=1)
+    runs = quarter_car_runs(20, 5000, seed=1)
+    return runs.pressure, runs.road, runs.acc
 
 
 def test_ukf_with_the_true_road_finds_the_pressure(truth):
@@ -133,7 +104,7 @@ def test_bad_measurements_are_refused():
 
 
 def test_shipped_identified_parameters_are_the_default():
-    from identification.quarter_car_fit import DEFAULT_BOUNDS
+    from suvtwin.identification.quarter_car_fit import DEFAULT_BOUNDS
 
     bank = load_modes()
     assert bank.classes == ("A", "B", "C", "D") and "suv_fl_paper_scale.json" in bank.source

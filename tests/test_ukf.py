@@ -4,8 +4,14 @@ import numpy as np
 import pytest
 from filterpy.kalman import MerweScaledSigmaPoints, UnscentedKalmanFilter
 
-from estimators.quarter_car import QuarterCar, accelerations, measurement_noise, process_euler, process_noise
-from estimators.ukf import merwe_weights, robust_cholesky, ukf_predict, ukf_update
+from suvtwin.estimators.quarter_car import (
+    QuarterCar,
+    accelerations,
+    measurement_noise,
+    process_euler,
+    process_noise,
+)
+from suvtwin.estimators.ukf import merwe_weights, robust_cholesky, ukf_predict, ukf_update
 
 DT = 1e-3
 QC = QuarterCar(

@@ -1,5 +1,6 @@
 """The MuJoCo SUV against statics, the 2-DOF quarter car and MuJoCo's own geometry queries."""
 
+from importlib import resources
 from pathlib import Path
 
 import mujoco
@@ -8,16 +9,16 @@ import pytest
 import scipy.signal
 import scipy.stats
 
-from mjcf.builder import build_model, flat_road_xml
-from mjcf.kernel import road_height
-from mjcf.tire import TireParams
-from mjcf.vehicle import CORNERS, GRAVITY, load_vehicle, parameter_table
-from pipeline.road_spec import RoadSpec, SegmentSpec
-from pipeline.roads import generate_road
-from pipeline.scenario import parse_scenario
-from pipeline.simulator import read_run, simulate, write_run
+from suvtwin.mjcf.builder import build_model, flat_road_xml
+from suvtwin.mjcf.kernel import road_height
+from suvtwin.mjcf.tire import TireParams
+from suvtwin.mjcf.vehicle import CORNERS, GRAVITY, load_vehicle, parameter_table
+from suvtwin.pipeline.scenario import parse_scenario
+from suvtwin.pipeline.simulator import read_run, simulate, write_run
+from suvtwin.roads.profile import generate_road
+from suvtwin.roads.spec import RoadSpec, SegmentSpec
 
-SUV_DIR = Path(__file__).parents[1] / "mjcf" / "suv"
+SUV_DIR = Path(str(resources.files("suvtwin.mjcf") / "suv"))
 VEHICLE = load_vehicle()
 TIRE = TireParams()
 QUIET = {"accel_sprung_mps2": 0.0, "accel_unsprung_mps2": 0.0}
@@ -263,7 +264,7 @@ def _circle(pressure_kpa, steering):
 
 
 def test_steady_circle_lateral_acceleration_and_pressure_effect():
-    from mjcf.tire import tire_forces
+    from suvtwin.mjcf.tire import tire_forces
 
     v, radius = 60 / 3.6, 50.0
     closed = _circle(250.0, {"mode": "circle", "radius_m": radius, "direction": "left"})

@@ -32,8 +32,8 @@ import numpy as np
 import numpy.typing as npt
 import scipy.signal
 
-from pipeline.errors import InputError
-from pipeline.iso8608 import N0_CYCLES_PER_M, class_of_level
+from suvtwin.errors import InputError
+from suvtwin.roads.iso8608 import N0_CYCLES_PER_M, class_of_level
 
 __all__ = ["DEFAULT_FIT_BAND", "IsoFit", "classify_profile", "fit_iso", "profile_psd"]
 

@@ -17,10 +17,10 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from pipeline.files import save_figure  # noqa: E402
-from pipeline.iso8608 import CLASSES, class_bounds, displacement_psd  # noqa: E402
-from pipeline.roads import Road  # noqa: E402
-from pipeline.roughness import DEFAULT_FIT_BAND, classify_profile, profile_psd  # noqa: E402
+from suvtwin.files import save_figure  # noqa: E402
+from suvtwin.roads.iso8608 import CLASSES, class_bounds, displacement_psd  # noqa: E402
+from suvtwin.roads.profile import Road  # noqa: E402
+from suvtwin.roads.roughness import DEFAULT_FIT_BAND, classify_profile, profile_psd  # noqa: E402
 
 __all__ = ["plot_road"]
 

@@ -30,7 +30,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from pipeline.errors import InputError
+from suvtwin.errors import InputError
 
 __all__ = [
     "CLASSES",

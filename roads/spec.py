@@ -6,7 +6,7 @@ A road is a sequence of segments (each with its own ISO 8608 roughness level
 and waviness) on two parallel wheel tracks, plus deterministic obstacles. The
 spec is a frozen pydantic model so that it validates user files (YAML, TOML,
 JSON) with messages that name the field and the allowed range; the generator in
-:mod:`pipeline.roads` turns it into arrays. All lengths in m, levels in m³ at
+:mod:`suvtwin.roads.profile` turns it into arrays. All lengths in m, levels in m³ at
 n0 = 0.1 cycle/m (ISO 8608 cycle form).
 """
 
@@ -17,8 +17,8 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from pipeline.errors import InputError
-from pipeline.iso8608 import CLASSES, class_bounds, class_level, class_of_level
+from suvtwin.errors import InputError
+from suvtwin.roads.iso8608 import CLASSES, class_bounds, class_level, class_of_level
 
 __all__ = [
     "MAX_SPACING_M",

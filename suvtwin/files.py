@@ -13,7 +13,7 @@ from pathlib import Path
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from pipeline.errors import InputError
+from suvtwin.errors import InputError
 
 __all__ = ["atomic_write", "package_versions", "read_parquet_table", "save_figure"]
 

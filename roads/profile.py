@@ -57,10 +57,10 @@ import pyarrow.parquet as pq
 import scipy.fft
 import scipy.signal
 
-from pipeline.errors import InputError
-from pipeline.files import atomic_write, package_versions, read_parquet_table
-from pipeline.iso8608 import N0_CYCLES_PER_M, OMEGA0_RAD_PER_M
-from pipeline.road_spec import ObstacleSpec, RoadSpec
+from suvtwin.errors import InputError
+from suvtwin.files import atomic_write, package_versions, read_parquet_table
+from suvtwin.roads.iso8608 import N0_CYCLES_PER_M, OMEGA0_RAD_PER_M
+from suvtwin.roads.spec import ObstacleSpec, RoadSpec
 
 __all__ = [
     "SHAPE_FILTER_ALPHA",
