@@ -25,7 +25,7 @@ References
 .. [1] H. A. P. Blom, Y. Bar-Shalom, "The interacting multiple model algorithm for systems
    with Markovian switching coefficients", IEEE TAC 33(8), 1988. doi:10.1109/9.1299
 .. [2] R. Labbe, FilterPy 2.0, ``filterpy.kalman.IMMEstimator``.
-.. [3] R. Brancati, F. Tufano, Sensors, 2022, eq. 9–14 and 17.
+.. [3] R. Brancati, F. Tufano, Machines 10(12), 1221, 2022, eq. 9–14 and 17.
 """
 
 from __future__ import annotations

@@ -33,11 +33,11 @@ at 1e-9 × that mean; a run's repair count grows by one for each step in which a
 modes needed a repair.
 
 Why hand-written: the numpy path advances a whole batch per call but pays ~20 numpy
-calls per time step, so one run is bound by Python overhead (~5–8k steps/s). We know of
-no maintained library with a batched, compiled IMM of UKFs: filterpy is pure Python with
-one object per filter (~800 steps/s for this IMM), pykalman's unscented filters are
-single-model numpy code, and JAX-based filter libraries would add a JIT framework this
-project does not use. Here the loops over runs,
+calls per time step, so one run is bound by Python overhead. We know of no maintained
+library with a batched, compiled IMM of UKFs: filterpy is pure Python with one object
+per filter (its speed against both paths: ``python bench/estimator_speed.py``),
+pykalman's unscented filters are single-model numpy code, and JAX-based filter libraries
+would add a JIT framework this project does not use. Here the loops over runs,
 modes, sigma points and matrix entries are compiled with numba (``cache=True``: the
 first call in a fresh environment compiles for a few seconds, later processes load the
 cached machine code); all matrices are 5×5 or 6×6, so explicit loops beat BLAS calls.

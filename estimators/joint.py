@@ -2,8 +2,8 @@ r"""Road-level-free tire-stiffness estimator: joint Whittle likelihood over (k_t
 
 Usual call: ``est = estimate_joint(acc_s, acc_us, dt, qc=qc, speed_mps=16.7)``.
 
-Why (DESIGN.md, "Identifiability"): from the two accelerations alone every k_t fits
-if the road is free; what decides k_t is the road's *spectrum*. Assuming a road
+Why (``docs/DESIGN.md``, "Identifiability of tyre stiffness"): from the two accelerations
+alone every k_t fits if the road is free; what decides k_t is the road's *spectrum*. Assuming a road
 level biases k_t along :math:`k_t \propto G_d^{-1/2}` (above the wheel hop the
 unsprung acceleration is :math:`(k_t/m_{us})^2` times the road PSD), and real roads
 sit anywhere in a class band (4× in :math:`G_d`). So the level is estimated jointly.
@@ -30,46 +30,41 @@ the data orthogonal to it is noise only, and up to a constant
 
 By default :math:`\hat S` is the periodogram of the whole record so far (linear
 detrend, rectangular window, one term per Fourier frequency, K = 1): the exact
-Whittle likelihood, which keeps the record's full frequency resolution. (Averaging
-2 s Bartlett segments, the previous default and still ``segment_s=2``, gave a
-pressure-error std at 10 s ~15 % larger: RMS over five batches 16.2 against 14.1 kPa.)
+Whittle likelihood, which keeps the record's full frequency resolution. Averaging
+Bartlett segments (``segment_s``, the earlier estimator's spectrum) coarsens the
+resolution and costs precision (``python bench/joint_accuracy.py 2,11,7,3,5 10 2``
+against the default; README, "Benchmarks").
 For each k_t on a grid of pressures (1 kPa) the level is profiled out by Fisher
 scoring in :math:`\log S_v`, and the marginal over the level (log-uniform prior
 over `level_grid`'s range) is taken by Laplace's method. The posterior (flat in
 pressure) gives k_t, its σ and the level.
 The band is where the road follows the ISO slope and the tire does not envelop it
-(default 0.05–1.5 cycles/m times the speed, at most 30 Hz); on quarter-car truth a
-band up to 9 cycles/m gave no better estimate. The estimate is refreshed every
-`update_s` seconds on all data so far.
+(default 0.05–1.5 cycles/m times the speed, at most 30 Hz). The estimate is refreshed
+every `update_s` seconds on all data so far.
 
-Waviness (``bench/joint_waviness.py``): the above assumes the ISO classes' slope, w = 2 (road
-velocity white). Measured roads have w ~1.5-3, and a wrong slope is read as a wrong k_t (10 s,
-60 km/h, quarter-car truth, mean of 8 runs: +47 to +67 kPa at w = 1.6, -91 to -117 kPa at w = 2.8). So the
+Waviness: the above assumes the ISO classes' slope, w = 2 (road velocity white). Measured
+roads bend away from it (w between about 1.5 and 3), and a wrong slope is read as a wrong
+k_t, since above the wheel hop the signal is :math:`k_t^2 S_v` times the road's slope. So the
 road-velocity PSD is :math:`S_v(n_0)(n/n_0)^{\beta}`, :math:`\beta = 2 - w`, and β is profiled with
 the level (:func:`profile_loglik_slope`, Fisher scoring in (λ, β)), the pair marginalized by Laplace.
-A free slope is nearly collinear with k_t (above the wheel hop the signal is :math:`k_t^2 S_v` times a
-slope), so it costs precision on ISO roads: the Cramér–Rao bound at 10 s rises from ~14.5 to ~25 kPa
-(w uniform in [1.5, 3]: error std 22.7 kPa against 15.4 on w = 2 roads). The prior on w is therefore a
-spike and slab: w = 2 with probability `waviness_iso_weight` (default 0.8), else uniform over the
-range; each profile's marginal likelihood weighs the two. With the default, on w = 2 roads the std
-is ~2 % above the w = 2 model's, and on roads of w uniform in [1.5, 3] the error is -2 ± 26 kPa
-instead of -24 ± 58 kPa (60 runs); the mean of 8 runs at w = 1.6 keeps +2 to +34 kPa, at w = 2.8
--19 to +7 kPa. On the MuJoCo SUV (corner model, 10 s): 100 runs on w = 2 roads +1.7 ± 13.5 kPa
-(w = 2 model: +3.6 ± 13.0); the campaign's ``non_iso_road`` (segments of w 1.6, 2.6, 3.0, whose
-mixed spectrum fits w ≈ 2.2) -46 kPa (w = 2 model: -53; w uniform: -13, but ±20.7 on the w = 2
-runs). ``waviness=2.0`` is the former model, bit for bit; the slope roughly doubles the run time.
+A free slope is nearly collinear with k_t, so it costs precision on ISO roads. The prior on w is
+therefore a spike and slab: w = 2 with probability `waviness_iso_weight` (default 0.8), else
+uniform over the range; each profile's marginal likelihood weighs the two, so the default keeps
+nearly the w = 2 model's precision on w = 2 roads and removes most of the bias on others
+(``python bench/joint_waviness.py``: fixed, free and spike-and-slab slope on quarter-car truth
+and on the MuJoCo SUV; numbers in the README, "Benchmarks"). ``waviness=2.0`` is the former
+model, bit for bit; the free slope adds a second profiled parameter and so costs run time.
 
-Precision (``bench/joint_accuracy.py``): the pressure-error std is at the
-Cramér–Rao bound of this Gaussian road model, ~13–16 kPa after 10 s at 60 km/h
-with 0.5 m/s² noise (bound 13.4 kPa at 130 kPa, 15.7 kPa at 230 kPa) and
-~8 kPa after 30 s. On the superposition roads of :mod:`suvtwin.roads.profile`, whose
-lines have fixed amplitudes, the periodogram scatters less than a Gaussian road's
-once the record resolves the lines, and the error after 30 s is smaller (~5 kPa).
+Precision: the pressure-error std is at the Cramér–Rao bound of this Gaussian road model
+(``python bench/joint_accuracy.py`` prints both). On the superposition roads of
+:mod:`suvtwin.roads.profile`, whose lines have fixed amplitudes, the periodogram scatters less
+than a Gaussian road's once the record resolves the lines, so over long records the error can
+fall below that bound.
 
 References
 ----------
 .. [1] P. Whittle, "Curve and periodogram smoothing", J. R. Stat. Soc. B 19(1), 1957.
-.. [2] R. Brancati, F. Tufano, Sensors, 2022, eq. 1–4 (the quarter car and k_t(p)).
+.. [2] R. Brancati, F. Tufano, Machines 10(12), 1221, 2022, eq. 1–4 (the quarter car and k_t(p)).
 """
 
 from __future__ import annotations
@@ -456,8 +451,8 @@ def estimate_joint(
     waviness_iso_weight : float
         With a waviness range, the prior probability that the road is an ISO one, w = 2 exactly (a
         spike and slab prior: the rest uniform over the range). 0: w uniform over the range. The
-        default 0.8 keeps the precision on w = 2 roads and removes most of the bias elsewhere (see
-        the module's "Waviness").
+        default 0.8 keeps nearly the precision of w = 2 on w = 2 roads and removes most of the bias
+        elsewhere (see the module's "Waviness").
 
     Returns
     -------

@@ -124,8 +124,9 @@ def _bank(table: dict, source: str) -> ModeBank:
 
 
 IDENTIFIED_FILE = Path(str(resources.files("suvtwin.identification") / "data" / "suv_fl_paper_scale.json"))
-"""QC parameters identified on this project's SUV (front-left corner, classes A–D, NSGA-III
-pop 100 × 1000 generations, seed 1; ``suvtwin identify`` / ``bench/identification_speed.py paper``)."""
+"""QC parameters identified at paper scale on this project's SUV (front-left corner, classes A–D);
+the GA settings and seed are in the file's ``metadata``, and ``python bench/identification_speed.py
+paper`` makes it again (README, "Benchmarks")."""
 
 
 def load_modes(source: str | Path = "identified") -> ModeBank:
@@ -170,15 +171,16 @@ class EstimatorSettings:
         Non-linear damper term (see :mod:`suvtwin.estimators.quarter_car`).
     discretization : "semi-implicit" or "euler"
         Process model: semi-implicit Euler (default), or forward Euler as eq. 15 (the
-        paper, literally). Measured on the quarter-car oracle (true road, 20 seeds,
-        60 km/h, 1 kHz): forward Euler biases the pressure by about -5 kPa.
+        paper, literally), which inflates the wheel-hop oscillation and so biases the
+        pressure low (:func:`suvtwin.estimators.quarter_car.process_semi_implicit`;
+        ``tests/test_tire_pressure.py`` checks the sign).
         Either way the road is taken at the middle of the step.
     initial_state_sigma : tuple of 4 floats
         Initial std of z_s, z_us (m) and v_s, v_us (m/s).
     backend : "numba" or "numpy"
         "numba" (default): the compiled per-step loop of :mod:`suvtwin.estimators.imm_ukf_kernel`
-        (same algorithm and order of operations; ~40x the numpy path for one run, ~3x
-        batched over 100 runs: ``bench/estimator_speed.py``). "numpy": the
+        (same algorithm and order of operations, faster than the numpy path, most of all
+        for one run: ``python bench/estimator_speed.py``). "numpy": the
         readable reference built from :mod:`suvtwin.estimators.imm` and :mod:`suvtwin.estimators.ukf`,
         batched over runs and modes; the two agree to rounding (tests/test_imm_ukf_kernel.py).
     """

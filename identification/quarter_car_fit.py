@@ -17,7 +17,7 @@ scenario — 18 for the paper's nine (3 speeds × 3 pressures).
 The quarter car is driven by the known road under the tire and simulated with the
 discretization the estimator uses (:func:`suvtwin.estimators.quarter_car.process_semi_implicit`,
 road at mid-step), for a whole population × all scenarios in one compiled loop:
-this is the hot loop of the GA (DESIGN.md: numba for the few per-step loops).
+this is the hot loop of the GA, so it is compiled with numba like the other per-step loops.
 
 The algorithm is pymoo's NSGA-III with Das–Dennis-free "energy" reference
 directions (suited to 18 objectives); problem, algorithm and termination are kept

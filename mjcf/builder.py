@@ -32,8 +32,9 @@ collides with the heightfield through a stiff, frictionless contact; the kernel
 applies the same radial tire law Fz = kt(p)·δ + ct·δ̇ on that slide (δ = its
 travel) and the same MF-Tyre forces at the wheel. Only the road geometry then
 comes from MuJoCo instead of the enveloped heightfield reading. (MuJoCo's soft
-contact alone cannot stand for the tire spring: on a heightfield a sphere makes
-1–6 contacts whose joint stiffness changes 8× between a flat and a class A road.)
+contact alone cannot stand for the tire spring: on a heightfield a sphere makes a
+varying number of contacts whose combined stiffness changes with the road under it;
+``docs/DESIGN.md``, "Tyre–road contact".)
 With ``"envelope"`` (default) nothing collides.
 """
 

@@ -38,11 +38,11 @@ Coefficients (defaults of :class:`TireParams`):
   86728279fe12; that file's NOMPRES was edited to 200 kPa, its scaling factors are
   not 1 and are not used here). The same values appear in other public transcriptions of the
   book's table, except PCY1, given there as 1.338 (1.337 in the .tir).
-- Pressure terms: DESIGN.md ("Reference numbers"), from the TNO MF-Tyre 6.1 example
-  at NOMPRES 220 kPa: PFZ1 0.7097; PPX1–4 −0.3489, 0.382, −0.0963, 0.0645;
-  PPY1–4 −0.6249, −0.0654, −0.1668, 0.2834. The .tir above rounds them differently
-  (PFZ1 0.7098; PPX −0.3485, 0.37824, −0.09603, 0.06518; PPY −0.6255, −0.06523,
-  −0.16666, −0.2811): its PPY4 has the opposite sign. DESIGN.md's values are used.
+- Pressure terms: the TNO MF-Tyre 6.1 example tyre at NOMPRES 220 kPa as quoted by the
+  suvtwin developers (not checked against a published file): PFZ1 0.7097; PPX1–4 −0.3489,
+  0.382, −0.0963, 0.0645; PPY1–4 −0.6249, −0.0654, −0.1668, 0.2834. The .tir above rounds
+  them differently (PFZ1 0.7098; PPX −0.3485, 0.37824, −0.09603, 0.06518; PPY −0.6255,
+  −0.06523, −0.16666, −0.2811): its PPY4 has the opposite sign. The quoted values are used.
 - Kept dimensionless: the MF shape is that of the 205/60R15 tyre, but the
   operating point is moved to the SUV (235/60R18): :math:`p_0` = 250 kPa (paper 000),
   :math:`F_{z0}` = 5000 N (an SUV corner's static load), :math:`R_0` = 0.37 m,
@@ -65,7 +65,8 @@ References
    tyre model that can handle inflation pressure changes", Vehicle System Dynamics 48(S1),
    pp. 337–352, 2010. doi:10.1080/00423111003748088
 .. [3] R. Brancati, F. Tufano, "Indirect estimation of tire pressure on several road pavements
-   via Interacting Multiple Model approach", Sensors, 2022 (paper 000 of this project).
+   via Interacting Multiple Model approach", Machines 10(12), 1221, 2022.
+   doi:10.3390/machines10121221
 
 Examples
 --------
@@ -119,7 +120,7 @@ class TireParams:
     # N s/m: MF-Tyre .tir files give VERTICAL_DAMPING 50-500 N s/m for car tyres (the 205/60R15
     # file: 50; MFeval's MF 6.1 example: 500); paper 000 neglects tyre damping
     vertical_damping: float = 200.0
-    pfz1: float = 0.7097  # MF-Tyre 6.1 PFZ1, pressure effect on vertical stiffness (DESIGN.md)
+    pfz1: float = 0.7097  # MF-Tyre 6.1 PFZ1, pressure effect on vertical stiffness
     lambda_mu: float = 1.0  # friction scaling LMUX = LMUY (1: dry asphalt of the fit)
     # longitudinal, pure slip (.tir [LONGITUDINAL_COEFFICIENTS])
     pcx1: float = 1.579
@@ -132,7 +133,7 @@ class TireParams:
     pkx1: float = 21.687
     pkx2: float = 13.728
     pkx3: float = -0.4098
-    ppx1: float = -0.3489  # DESIGN.md
+    ppx1: float = -0.3489  # PPX1-4, PPY1-4: the quoted values (module docstring)
     ppx2: float = 0.382
     ppx3: float = -0.0963
     ppx4: float = 0.0645
@@ -146,7 +147,7 @@ class TireParams:
     pky1: float = -15.324  # ISO-W sign; only |PKY1| is used
     pky2: float = 1.715
     pky4: float = 2.0005
-    ppy1: float = -0.6249  # DESIGN.md
+    ppy1: float = -0.6249  # quoted value (module docstring)
     ppy2: float = -0.0654
     ppy3: float = -0.1668
     ppy4: float = 0.2834

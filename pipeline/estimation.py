@@ -148,9 +148,9 @@ def linear_corner_model(corner: str, sprung_mass: float) -> LinearQuarterCar:
     over twice the squared half-track of the corner's axle. The digressive damper's equivalent
     linear damping lies between the means of its high-speed and of its low-speed compression and
     rebound slopes, depending on the suspension velocity: the estimator marginalizes over that range
-    (``damping`` is the low-speed mean). Measured on 40 MuJoCo runs (classes A-D, 10 s): the plain
-    quarter car overestimated the pressure by 33 kPa, of which the anti-roll bar ~19 kPa and the
-    digressive damper ~13 kPa (bench/joint_mujoco.py)."""
+    (``damping`` is the low-speed mean). Leaving out the anti-roll bar or the digressive damper
+    biases the pressure high; ``python bench/joint_mujoco.py`` compares this model with the plain
+    quarter car on a campaign's MuJoCo runs."""
     vehicle = load_vehicle()
     s = vehicle.suspension
     i = CORNERS.index(corner)

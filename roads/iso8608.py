@@ -22,7 +22,8 @@ References
 .. [1] ISO 8608:2016, "Mechanical vibration — Road surface profiles — Reporting
    of measured data", International Organization for Standardization.
 .. [2] R. Brancati, F. Tufano, "Indirect estimation of tire pressure on several
-   road pavements via Interacting Multiple Model approach", Sensors, 2022.
+   road pavements via Interacting Multiple Model approach", Machines 10(12), 1221, 2022.
+   doi:10.3390/machines10121221
 """
 
 from __future__ import annotations

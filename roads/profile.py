@@ -38,7 +38,8 @@ identical, or correlated with coefficient ρ at every wavelength
 References
 ----------
 .. [1] R. Brancati, F. Tufano, "Indirect estimation of tire pressure on several
-   road pavements via Interacting Multiple Model approach", Sensors, 2022.
+   road pavements via Interacting Multiple Model approach", Machines 10(12), 1221, 2022.
+   doi:10.3390/machines10121221
 .. [2] Lin et al., "Vertical vehicle dynamics estimated inputs", 2021.
 .. [3] ISO 8608:2016, "Mechanical vibration — Road surface profiles".
 """

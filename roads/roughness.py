@@ -152,8 +152,8 @@ def classify_profile(
 
     The Welch segment is long enough for a resolution of a quarter of the band's
     lower edge (4/band[0] m): coarser segments bias the steep n^-2 spectrum up
-    through the Hann window's main lobe (+4 % in Gd(n0) at half the edge,
-    measured on 2 km superposition roads). A profile too short for that raises
+    through the Hann window's main lobe (leakage from the stronger low
+    frequencies). A profile too short for that raises
     the lower edge to 4/length (with a warning); the band used is in the result.
 
     Parameters

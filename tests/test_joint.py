@@ -76,7 +76,8 @@ def test_fixed_level_bias_law_and_level_recovery():
         est = estimate_joint(acc[..., 0], acc[..., 1], DT, qc=QC, speed_mps=SPEED, fixed_level=factor * level,
                              waviness=2.0)  # fmt: skip
         kt[factor] = est.stiffness[:, -1]
-    # DESIGN.md: assuming the level x4 scales k_t by about x0.5 (k_t ~ Gd^-1/2); measured x0.57-0.60
+    # k_t ~ Gd^-1/2 (docs/DESIGN.md, "Identifiability of tyre stiffness"): assuming the level x4
+    # scales k_t by about x0.5; measured x0.57-0.60 on these runs
     assert np.all((kt[4.0] / kt[1.0] > 0.45) & (kt[4.0] / kt[1.0] < 0.65))
     assert np.all((kt[0.25] / kt[1.0] > 1.4) & (kt[0.25] / kt[1.0] < 2.2))
     free = estimate_joint(acc[..., 0], acc[..., 1], DT, qc=QC, speed_mps=SPEED)

@@ -27,8 +27,9 @@ P = TireParams()
 TP = P.to_array()
 P0, FZ0, KT0 = 250e3, 5000.0, 264700.0  # the SUV operating point (module docstring)
 
-# Coefficients typed again from the .tir file (henrytad/tire_model examples/sample.tir) and DESIGN.md,
-# not read from TireParams, so a wrong default shows up here.
+# Coefficients typed again from the .tir file (henrytad/tire_model examples/sample.tir) and the
+# pressure terms quoted in mjcf/tire.py's docstring, not read from TireParams, so a wrong default
+# shows up here.
 PKX1, PKX2, PKX3 = 21.687, 13.728, -0.4098
 PDX1, PDX2 = 1.0422, -0.08285
 PKY1, PKY2, PKY4 = -15.324, 1.715, 2.0005
@@ -75,7 +76,7 @@ def test_index_constants_follow_the_field_order():
 
 
 def test_stiffness_pressure_law_of_paper_000():
-    # DESIGN.md: with PFZ1 = 0.7097 a 20 % pressure loss lowers kt by 14.2 %, 25 % by 17.7 %
+    # eq. 3-4 by hand: with PFZ1 = 0.7097 a 20 % pressure loss lowers kt by 14.2 %, 25 % by 17.7 %
     assert vertical_stiffness(P0, TP) == pytest.approx(KT0, rel=1e-15)
     assert 1 - vertical_stiffness(0.80 * P0, TP) / KT0 == pytest.approx(0.142, abs=5e-4)
     assert 1 - vertical_stiffness(0.75 * P0, TP) / KT0 == pytest.approx(0.177, abs=5e-4)
@@ -167,7 +168,7 @@ def _model_peaks(fz, p):
 
 def test_pressure_effects_have_the_signs_of_the_fit():
     pressures = (120e3, 160e3, 200e3, 250e3, 300e3)
-    # PPY1 < 0 (DESIGN.md note): at nominal load the cornering stiffness RISES as pressure falls
+    # PPY1 < 0 (docs/DESIGN.md, "Tyre model"): at nominal load the cornering stiffness RISES as pressure falls
     ky = [abs(_model_ky(FZ0, p)) for p in pressures]
     assert all(a > b for a, b in zip(ky, ky[1:], strict=False))
     assert ky[0] / ky[3] == pytest.approx(_hand_ky(FZ0, 120e3) / _hand_ky(FZ0, P0), rel=1e-5)
