@@ -2,6 +2,9 @@
 each criterion passes and fails on either side of its threshold, and is "not applicable"
 (None) where it does not apply."""
 
+import subprocess
+import sys
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -143,3 +146,12 @@ def test_monte_carlo_claims_at_the_end_of_the_runs():
     mc_better = _mc_table({"imm_synthetic": {"rmse_kpa": 7.9}, "ukf_synthetic": {"rmse_kpa": 8.0}})
     cells = _goal(goal_table(metrics, mc_better, {}, ("imm_synthetic", "ukf_synthetic")), "outperforms")
     assert cells["imm_synthetic"]["pass"] is True
+
+
+def test_the_evaluation_and_the_registry_import_no_plotting_library():
+    code = (
+        "import sys; import suvtwin.pipeline.report.claims, suvtwin.pipeline.estimator_registry, "
+        "suvtwin.pipeline.report; print('matplotlib' in sys.modules)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
