@@ -121,7 +121,10 @@ def scenario_figure(name: str, series: dict, estimators: tuple[str, ...]) -> str
 
 def road_psd_figure(x_m: np.ndarray, z_m: np.ndarray) -> str:
     """Displacement PSD of the road a wheel drove over (elevation `z_m` at positions `x_m`, m, as the run
-    stored them), resampled to uniform spacing, against the ISO 8608 class bands (Fig. 12 analog)."""
+    stored them), resampled to uniform spacing, against the ISO 8608 class bands (Fig. 12 analog).
+
+    A run stores the road as the tire met it (``{corner}_road_z_m``: enveloped over the contact
+    patch), so wavelengths shorter than the patch are attenuated."""
     from suvtwin.roads.iso8608 import CLASSES, class_bounds, displacement_psd
     from suvtwin.roads.roughness import profile_psd
 
@@ -132,7 +135,7 @@ def road_psd_figure(x_m: np.ndarray, z_m: np.ndarray) -> str:
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(6.5, 4))
     keep = n > 0
-    ax.loglog(n[keep], psd[keep], "k", lw=1, label="road under the wheel (Welch)")
+    ax.loglog(n[keep], psd[keep], "k", lw=1, label="road under the wheel, enveloped (Welch)")
     grid = np.logspace(-2, 1, 50)
     for c in CLASSES[:5]:
         lower, upper = class_bounds(c)

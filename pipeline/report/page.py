@@ -252,6 +252,11 @@ def write_report(
             parts.append(f"<p><small>{html.escape(info)}</small></p>")
             if s.name == "non_iso_road":
                 x, z = series["road"][s.name]
+                parts.append(
+                    f"<p>Road spectrum (Figure 12 analog) of the elevation this run stored under the {html.escape(config.corner)} "
+                    "wheel against the distance driven: the road as the tire met it, averaged over the contact patch, so "
+                    "wavelengths shorter than the patch (above about 2 cycles/m) are attenuated.</p>"
+                )
                 parts.append(_img(road_psd_figure(x, z), "road PSD against the ISO bands"))
             parts.append(_img(scenario_figure(s.name, series, estimators), s.title))
 
