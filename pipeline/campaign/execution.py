@@ -272,13 +272,14 @@ def run_campaign(config: CampaignConfig, out: str | Path, *, jobs: int = 1, prog
         timings["identification_s"] = time.perf_counter() - t0
 
         t0 = time.perf_counter()
-        run_paths, timings["simulated_runs"] = _simulation(specs, fingerprint, out, pool, progress)
+        run_paths, simulated = _simulation(specs, fingerprint, out, pool, progress)
         timings["simulation_s"] = time.perf_counter() - t0
+        timings["simulated_runs"] = simulated
 
         t0 = time.perf_counter()
-        est_paths, timings["estimates_made"] = _estimation(config, specs, run_paths, params_path, out, pool,
-                                                           progress)  # fmt: skip
+        est_paths, made = _estimation(config, specs, run_paths, params_path, out, pool, progress)
         timings["estimation_s"] = time.perf_counter() - t0
+        timings["estimates_made"] = made
     finally:
         pool.close()
 
