@@ -27,13 +27,11 @@ from suvtwin.files import atomic_write, read_parquet_table
 from suvtwin.mjcf.tire import TireParams
 from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
 from suvtwin.pipeline.estimator_registry import CornerSignals, estimate_columns, find_estimator
-from suvtwin.pipeline.scoring import run_metrics
+from suvtwin.pipeline.scoring import PRESSURE_TOLERANCE_KPA, run_metrics
 
 __all__ = ["EstimateRun", "estimate_run", "linear_corner_model", "score_estimate", "write_estimate"]
 
 _METADATA_KEY = b"suvtwin.estimate"
-PRESSURE_TOLERANCE_KPA = 12.5
-"""Convergence band: 5 % of p0 = 250 kPa."""
 
 
 @dataclass(frozen=True)

@@ -19,8 +19,7 @@ import pyarrow.parquet as pq
 
 from suvtwin.pipeline.campaign.config import CampaignConfig
 from suvtwin.pipeline.campaign.runs import RunSpec
-from suvtwin.pipeline.estimation import PRESSURE_TOLERANCE_KPA
-from suvtwin.pipeline.scoring import monte_carlo_indexes, run_metrics
+from suvtwin.pipeline.scoring import PRESSURE_TOLERANCE_KPA, monte_carlo_indexes, run_metrics
 
 __all__ = ["MC_TIMES_S", "score_campaign"]
 

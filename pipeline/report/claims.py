@@ -17,8 +17,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from suvtwin.pipeline.estimation import PRESSURE_TOLERANCE_KPA
 from suvtwin.pipeline.estimator_registry import ESTIMATORS
+from suvtwin.pipeline.scoring import PRESSURE_TOLERANCE_KPA
 
 __all__ = ["CONVERGE_GOAL_S", "goal_table"]
 

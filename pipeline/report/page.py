@@ -21,13 +21,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from suvtwin.estimators.tire_pressure import PAPER_TABLE_3
 from suvtwin.files import atomic_write
-from suvtwin.mjcf.vehicle import load_vehicle
-from suvtwin.pipeline.estimation import PRESSURE_TOLERANCE_KPA
 from suvtwin.pipeline.estimator_registry import ESTIMATORS
 from suvtwin.pipeline.report.claims import goal_table
 from suvtwin.pipeline.report.figures import draws_figure, monte_carlo_figure, road_psd_figure, scenario_figure
+from suvtwin.pipeline.scoring import PRESSURE_TOLERANCE_KPA
 
 __all__ = ["write_report"]
 
@@ -107,6 +105,9 @@ def write_report(
     summary: dict,
 ) -> None:
     """Write the self-contained HTML report of a campaign (atomically)."""
+    from suvtwin.estimators.tire_pressure import PAPER_TABLE_3
+    from suvtwin.mjcf.vehicle import load_vehicle
+
     estimators = tuple(config.estimators)
     vehicle = load_vehicle()
     params = json.loads(Path(params_path).read_text())
