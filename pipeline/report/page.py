@@ -120,7 +120,7 @@ def write_report(
     n_mc = sum(s.kind == "monte_carlo" for s in specs)
     parts.append(
         "<p>This report re-runs the validation of the tire-pressure estimator of Brancati &amp; Tufano "
-        "(<i>Sensors</i> 2022, “Indirect estimation of tire pressure … via IMM”) on an open ground truth: "
+        "(<i>Machines</i> 10(12), 1221, 2022, “Indirect estimation of tire pressure … via IMM”) on an open ground truth: "
         "a MuJoCo model of a segment-D SUV with pressure-dependent tires, driven over ISO 8608 random roads. "
         "The paper's estimator is a bank of four unscented Kalman filters (UKF), one quarter-car model per "
         "road class A–D, mixed by an Interacting Multiple Model (IMM); it reads the vertical accelerations "
