@@ -21,6 +21,7 @@ import typer
 import yaml
 
 from suvtwin.errors import InputError, RunError
+from suvtwin.pipeline.estimator_registry import estimator_families, estimator_help, road_inputs
 from suvtwin.roads.iso8608 import CLASSES, class_bounds, level_cycle_to_omega
 from suvtwin.roads.spec import (
     MAX_SPACING_M,
@@ -351,15 +352,8 @@ def render_command(
     typer.echo(f"wrote {out} ({frames} frames at {fps} fps)")
 
 
-class EstimatorName(StrEnum):
-    imm = "imm"
-    ukf = "ukf"
-    joint = "joint"
-
-
-class RoadInput(StrEnum):
-    synthetic = "synthetic"
-    augmented = "augmented"
+EstimatorName = StrEnum("EstimatorName", [(f, f) for f in estimator_families()])
+RoadInput = StrEnum("RoadInput", [(r, r) for r in road_inputs()])
 
 
 @app.command("estimate")
@@ -372,9 +366,8 @@ def estimate_command(
     ],
     corner: Annotated[str, typer.Option(help="Corner to estimate: fl, fr, rl or rr.")] = "fl",
     estimator: Annotated[
-        EstimatorName,
-        typer.Option(help="imm: paper 000's IMM of 4 UKFs (classes A-D); ukf: its single UKF (A)."),
-    ] = EstimatorName.imm,
+        EstimatorName, typer.Option(help=estimator_help()),
+    ] = EstimatorName["imm"],
     params: Annotated[
         str,
         typer.Option(
@@ -383,8 +376,9 @@ def estimate_command(
     ] = "identified",
     road_input: Annotated[
         RoadInput,
-        typer.Option(help="What each mode assumes for the road: the paper's synthetic road or a road state."),
-    ] = RoadInput.synthetic,
+        typer.Option(help="What each mode assumes for the road: the paper's synthetic road or a road state "
+                     "(ignored by estimators that take no road input)."),
+    ] = RoadInput["synthetic"],
     seed: Annotated[int, typer.Option(help="Seed of the synthetic roads (≥ 0).")] = 0,
 ) -> None:
     """Estimate one tire's inflation pressure from its corner's two accelerometers."""
@@ -396,7 +390,8 @@ def estimate_command(
     result = estimate_run(run, corner=corner, estimator=estimator.value, params=params,
                           road_input=road_input.value, seed=seed)  # fmt: skip
     write_estimate(result, out)
-    what = estimator.value if estimator.value == "joint" else f"{estimator.value}, {road_input.value} road"
+    road = result.metadata["road_input"]
+    what = f"{estimator.value}, {road} road" if road == road_input.value else estimator.value
     typer.echo(f"wrote {out} ({len(result.table)} samples, corner {corner}, {what})")
 
 

@@ -21,19 +21,17 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from suvtwin.errors import InputError
-from suvtwin.estimators.joint import LinearQuarterCar, estimate_joint
-from suvtwin.estimators.quarter_car import pressure_from_stiffness, sprung_mass_share
-from suvtwin.estimators.tire_pressure import estimate_pressure, load_modes
+from suvtwin.estimators.joint import LinearQuarterCar
+from suvtwin.estimators.quarter_car import sprung_mass_share
 from suvtwin.files import atomic_write, read_parquet_table
 from suvtwin.mjcf.tire import TireParams
 from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
-from suvtwin.pipeline.scoring import run_metrics
+from suvtwin.pipeline.estimator_registry import CornerSignals, estimate_columns, find_estimator
+from suvtwin.pipeline.scoring import PRESSURE_TOLERANCE_KPA, run_metrics
 
 __all__ = ["EstimateRun", "estimate_run", "linear_corner_model", "score_estimate", "write_estimate"]
 
 _METADATA_KEY = b"suvtwin.estimate"
-PRESSURE_TOLERANCE_KPA = 12.5
-"""Convergence band: 5 % of p0 = 250 kPa."""
 
 
 @dataclass(frozen=True)
@@ -73,10 +71,13 @@ def _load_run(path: str | Path, corner: str) -> tuple[pd.DataFrame, dict, float]
 
 
 def estimate_run(
-    path: str | Path, *, corner: str, estimator: str, params: str, road_input: str, seed: int
+    path: str | Path, *, corner: str, estimator: str, params: str, road_input: str | None, seed: int
 ) -> EstimateRun:
-    """Run paper 000's IMM (``estimator="imm"``), its single UKF (``"ukf"``) or the road-level-free
-    estimator (``"joint"``, on the corner's linearized physical quarter car) on one corner of a run."""
+    """Run an estimator of the registry (:data:`suvtwin.pipeline.estimator_registry.ESTIMATORS`) on one
+    corner of a run: `estimator` is its family (``"imm"``: paper 000's IMM, ``"ukf"``: its single UKF,
+    ``"joint"``: the road-level-free estimator on the corner's linearized physical quarter car) and
+    `road_input` its road input (``"synthetic"`` or ``"augmented"``; ignored by ``"joint"``)."""
+    entry = find_estimator(estimator, road_input)
     frame, meta, dt = _load_run(path, corner)
     vehicle = load_vehicle()
     scenario = meta.get("scenario", {})
@@ -89,55 +90,30 @@ def estimate_run(
         load=load,
     )
     mus = vehicle.unsprung_mass[CORNERS.index(corner)]
-    if estimator == "joint":
-        return _estimate_joint_run(path, frame, corner, ms, mus, dt)
-    modes = load_modes(params)
-    if estimator == "ukf":
-        if "A" not in modes.classes:
-            raise InputError("--estimator ukf uses the class A mode, which the parameter file lacks")
-        modes = modes.subset(("A",))
-    elif estimator != "imm":
-        raise InputError(f"--estimator must be imm, ukf or joint, got {estimator!r}")
-    est = estimate_pressure(
-        frame[f"{corner}_accel_sprung_mps2"].to_numpy(),
-        frame[f"{corner}_accel_unsprung_mps2"].to_numpy(),
-        dt,
-        modes=modes,
+    signals = CornerSignals(
+        acc_sprung=frame[f"{corner}_accel_sprung_mps2"].to_numpy()[None, :],
+        acc_unsprung=frame[f"{corner}_accel_unsprung_mps2"].to_numpy()[None, :],
+        dt=dt,
+        speed_mps=np.array([max(float(frame["speed_mps"].mean()), 1.0)]),
+        corner=corner,
         sprung_mass=ms,
-        unsprung_mass=mus,
-        road_input=road_input,
-        speed_mps=max(float(frame["speed_mps"].mean()), 1.0),
-        seed=seed,
+        unsprung_mass=float(mus),
+        params=params,
+        seeds=np.array([seed]),
     )
-    columns = _common_columns(frame, est)
-    if est.mode_probability is not None:
-        for s, letter in enumerate(est.classes):
-            columns[f"mode_prob_{letter}"] = est.mode_probability[0, :, s]
-    for s, letter in enumerate(est.classes):
-        columns[f"mode_pressure_{letter}_kpa"] = pressure_from_stiffness(est.mode_stiffness[0, :, s]) / 1e3
+    batch = entry.run(signals)
     metadata = {
         "run_file": str(path),
         "corner": corner,
-        "estimator": estimator,
-        "road_input": road_input,
+        "estimator": entry.family,
+        "road_input": entry.road_input,
         "seed": seed,
         "sprung_mass_kg": ms,
         "unsprung_mass_kg": float(mus),
-        "covariance_repairs": int(est.repairs.sum()),
-        **est.info,
+        **batch.info,
     }
-    return EstimateRun(table=pd.DataFrame(columns), metadata=metadata)
-
-
-def _common_columns(frame: pd.DataFrame, est) -> dict:
-    """The columns every estimate file has, from an estimate of one run."""
-    return {
-        "t_s": frame["t_s"].to_numpy(),
-        "pressure_hat_kpa": est.pressure_pa[0] / 1e3,
-        "pressure_sigma_kpa": est.pressure_sigma_pa[0] / 1e3,
-        "tire_stiffness_hat_npm": est.stiffness[0],
-        "tire_stiffness_sigma_npm": est.stiffness_sigma[0],
-    }
+    table = pd.DataFrame(estimate_columns(batch, 0, frame["t_s"].to_numpy()))
+    return EstimateRun(table=table, metadata=metadata)
 
 
 def linear_corner_model(corner: str, sprung_mass: float) -> LinearQuarterCar:
@@ -169,30 +145,6 @@ def linear_corner_model(corner: str, sprung_mass: float) -> LinearQuarterCar:
             0.5 * (s.damper_compression_low + s.damper_rebound_low),
         ),
     )
-
-
-def _estimate_joint_run(path, frame, corner, ms, mus, dt) -> EstimateRun:
-    """The road-level-free estimator on the corner's linear roll-plane model (:func:`linear_corner_model`)."""
-    qc = linear_corner_model(corner, ms)
-    est = estimate_joint(
-        frame[f"{corner}_accel_sprung_mps2"].to_numpy(),
-        frame[f"{corner}_accel_unsprung_mps2"].to_numpy(),
-        dt,
-        qc=qc,
-        speed_mps=max(float(frame["speed_mps"].mean()), 1.0),
-    )
-    columns = {**_common_columns(frame, est), "road_level_hat_m3": est.road_level[0]}
-    metadata = {
-        "run_file": str(path),
-        "corner": corner,
-        "estimator": "joint",
-        "road_input": "estimated level",
-        "sprung_mass_kg": ms,
-        "unsprung_mass_kg": float(mus),
-        "quarter_car": {"spring_rate": qc.spring_rate, "damping": qc.damping},
-        **est.info,
-    }
-    return EstimateRun(table=pd.DataFrame(columns), metadata=metadata)
 
 
 def write_estimate(result: EstimateRun, path: str | Path) -> None:

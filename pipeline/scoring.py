@@ -23,7 +23,10 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["MonteCarloIndexes", "RunMetrics", "monte_carlo_indexes", "run_metrics"]
+__all__ = ["PRESSURE_TOLERANCE_KPA", "MonteCarloIndexes", "RunMetrics", "monte_carlo_indexes", "run_metrics"]
+
+PRESSURE_TOLERANCE_KPA = 12.5
+"""Convergence band of a pressure estimate: 5 % of p0 = 250 kPa."""
 
 
 @dataclass(frozen=True)

@@ -213,7 +213,7 @@ def test_identification_is_cached_one_class_at_a_time(tmp_path):
 
 
 def test_results_of_other_code_get_other_keys(tmp_path, monkeypatch):
-    import suvtwin.pipeline.campaign as campaign
+    import suvtwin.pipeline.campaign.cache as cache
 
     pkg = tmp_path / "digest_probe_pkg"
     pkg.mkdir()
@@ -221,11 +221,11 @@ def test_results_of_other_code_get_other_keys(tmp_path, monkeypatch):
     (pkg / "model.py").write_text("K = 1\n")
     (pkg / "notes.txt").write_text("not code\n")
     monkeypatch.syspath_prepend(str(tmp_path))
-    first = campaign._source_digest(("digest_probe_pkg",))
+    first = cache.source_digest(("digest_probe_pkg",))
     (pkg / "notes.txt").write_text("changed, still not code\n")
-    assert campaign._source_digest(("digest_probe_pkg",)) == first
+    assert cache.source_digest(("digest_probe_pkg",)) == first
     (pkg / "model.py").write_text("K = 2\n")
-    assert campaign._source_digest(("digest_probe_pkg",)) != first
-    assert campaign._source_digest(("digest_probe_pkg.model",)) != campaign._source_digest(
+    assert cache.source_digest(("digest_probe_pkg",)) != first
+    assert cache.source_digest(("digest_probe_pkg.model",)) != cache.source_digest(
         ("digest_probe_pkg",)
     )

@@ -1,0 +1,308 @@
+"""Execution of a campaign: a process pool, the workers, and the stages in order.
+
+Usual call: ``summary = run_campaign(preset("quick"), "results/", jobs=2, progress=True)``.
+
+Stages (Brancati & Tufano 2022, §5.2–5.4): identification (or a given parameter file),
+ground-truth runs, estimation (each estimator of the configuration, from
+:data:`suvtwin.pipeline.estimator_registry.ESTIMATORS`, on the chosen corner's accelerometers,
+with the *nominal* corner masses, paper 000 eq. 2), scoring
+(:mod:`suvtwin.pipeline.campaign.metrics`) and the report (:mod:`suvtwin.pipeline.report`).
+Every unit of work is a file of the content-addressed cache
+(:mod:`suvtwin.pipeline.campaign.cache`), so a re-run reuses finished work and an interrupted
+run resumes where it stopped. Each estimate depends on its own run only (per-run seeds; the
+batched filters are independent across the batch), so a resumed campaign gives the same bytes
+as an uninterrupted one.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from pathlib import Path
+
+import numpy as np
+
+from suvtwin.errors import InputError
+from suvtwin.estimators.tire_pressure import IDENTIFIED_FILE, PAPER_TABLE_3, load_modes
+from suvtwin.files import atomic_write, package_versions
+from suvtwin.pipeline.campaign.cache import (
+    ESTIMATION_SOURCES,
+    IDENTIFICATION_SOURCES,
+    digest,
+    model_fingerprint,
+    remove_stale_temporaries,
+)
+from suvtwin.pipeline.campaign.config import CampaignConfig
+from suvtwin.pipeline.campaign.metrics import score_campaign
+from suvtwin.pipeline.campaign.runs import RunSpec, campaign_specs
+from suvtwin.pipeline.estimator_registry import ESTIMATORS, CornerSignals, estimate_columns
+from suvtwin.pipeline.identification_runs import (
+    corner_masses,
+    identify_class,
+    parameter_file_content,
+    write_parameter_file,
+)
+from suvtwin.pipeline.scenario import parse_scenario
+
+__all__ = ["run_campaign"]
+
+
+def _simulate_to(args: tuple[dict, str]) -> str:
+    from suvtwin.pipeline.simulator import simulate, write_run
+
+    scenario, path = args
+    write_run(simulate(parse_scenario(scenario, source="campaign scenario")), path)
+    return path
+
+
+def _read_corner(path: str, corner: str) -> dict:
+    import pyarrow.parquet as pq
+
+    columns = ["t_s", "speed_mps", f"{corner}_accel_sprung_mps2", f"{corner}_accel_unsprung_mps2"]
+    frame = pq.read_table(path, columns=columns).to_pandas()
+    return {
+        "t": frame["t_s"].to_numpy(),
+        "speed": float(frame["speed_mps"].mean()),
+        "acc_s": frame[columns[2]].to_numpy(),
+        "acc_u": frame[columns[3]].to_numpy(),
+    }
+
+
+def _estimate_to(args: tuple) -> list[str]:
+    """Run one estimator on a batch of runs and write one estimate file per run."""
+    import pandas as pd
+
+    estimator, params_path, corner, run_paths, out_paths, initial_kpa, seeds = args
+    data = [_read_corner(p, corner) for p in run_paths]
+    if len({d["t"].size for d in data}) != 1:
+        raise InputError("a batch of runs must have equal lengths")
+    acc_s = np.array([d["acc_s"] for d in data])
+    acc_u = np.array([d["acc_u"] for d in data])
+    speed = np.array([max(d["speed"], 1.0) for d in data])
+    dt = float(np.mean(np.diff(data[0]["t"])))
+    ms, mus = corner_masses(corner)
+    signals = CornerSignals(
+        acc_sprung=acc_s, acc_unsprung=acc_u, dt=dt, speed_mps=speed, corner=corner, sprung_mass=ms,
+        unsprung_mass=mus, params=params_path, seeds=np.asarray(seeds),
+        initial_pressure_kpa=np.asarray(initial_kpa),
+    )  # fmt: skip
+    batch = ESTIMATORS[estimator].run(signals)
+    for b, out in enumerate(out_paths):
+        table = pd.DataFrame(estimate_columns(batch, b, data[b]["t"]))
+        atomic_write(out, lambda tmp, table=table: table.to_parquet(tmp, index=False, compression="zstd"))
+    return out_paths
+
+
+# ---------------------------------------------------------------- orchestration
+class _Pool:
+    """A process pool of `jobs` workers, or the calling process for ``jobs == 1``."""
+
+    def __init__(self, jobs: int):
+        self.executor = ProcessPoolExecutor(max_workers=jobs) if jobs > 1 else None
+
+    def run(self, fn, tasks: list, *, desc: str, total: int | None, unit: str, progress: bool) -> None:
+        """Run ``fn(task)`` for every task; the bar advances by ``len(result)`` or 1 per task."""
+        bar = None
+        if progress:
+            from tqdm import tqdm
+
+            bar = tqdm(total=total if total is not None else len(tasks), desc=desc, unit=unit, leave=True)
+
+        def advance(result):
+            if bar is not None:
+                bar.update(len(result) if isinstance(result, list) else 1)
+
+        try:
+            if self.executor is None:
+                for task in tasks:
+                    advance(fn(task))
+                return
+            pending: set[Future] = {self.executor.submit(fn, t) for t in tasks}
+            try:
+                while pending:
+                    done, pending = wait(pending, return_when=FIRST_COMPLETED)
+                    for future in done:
+                        advance(future.result())
+            except BaseException:
+                for future in pending:
+                    future.cancel()
+                raise
+        finally:
+            if bar is not None:
+                bar.close()
+
+    def close(self) -> None:
+        if self.executor is not None:
+            self.executor.shutdown(wait=True, cancel_futures=True)
+
+
+def _identification(config: CampaignConfig, out: Path, pool: _Pool, progress: bool) -> tuple[Path, dict]:
+    """The parameter file the IMM uses: given, cached, or identified now."""
+    if config.params_file is not None:
+        if config.params_file == "paper":
+            path = out / "identification" / "paper_table_3.json"
+            path.parent.mkdir(parents=True, exist_ok=True)
+            content = {"classes": PAPER_TABLE_3, "metadata": {"source": "Brancati & Tufano 2022, Table 3"}}
+            atomic_write(
+                path, lambda tmp: Path(tmp).write_text(json.dumps(content, indent=2, sort_keys=True))
+            )
+        else:
+            path = IDENTIFIED_FILE if config.params_file == "identified" else Path(config.params_file)
+        load_modes(path)  # validates
+        return path, {"source": str(path), "cached": True, "wall_time_s": 0.0}
+    ident = config.identification
+    key = digest(
+        {
+            "identification": ident.model_dump(),
+            "corner": config.corner,
+            "model": model_fingerprint(IDENTIFICATION_SOURCES),
+        }
+    )
+    folder = out / "identification" / key
+    path = folder / "params.json"
+    if path.is_file():
+        return path, {"source": str(path), "cached": True, "wall_time_s": 0.0, "key": key}
+    folder.mkdir(parents=True, exist_ok=True)
+    started = time.perf_counter()
+    todo = [c for c in ident.classes if not (folder / f"class_{c}.json").is_file()]
+    tasks = [(c, ident.model_dump(), config.corner, progress, i, str(folder)) for i, c in enumerate(todo)]
+    pool.run(_identify_class_to, tasks, desc="identification", total=len(tasks), unit="class", progress=False)
+    results = []
+    for c in ident.classes:
+        part = json.loads((folder / f"class_{c}.json").read_text())
+        results.append((c, part["parameters"], part["information"]))
+    content = parameter_file_content(results, pop_size=ident.pop_size, n_gen=ident.n_gen, seed=ident.seed)
+    write_parameter_file(content, path)
+    wall = time.perf_counter() - started
+    return path, {"source": str(path), "cached": False, "wall_time_s": wall, "key": key, "classes_run": todo}
+
+
+def _identify_class_to(args: tuple) -> str:
+    """Identify one class and write its parameters and information to ``class_{c}.json``."""
+    road_class, ident, corner, progress, position, folder = args
+    _, parameters, information = identify_class(
+        road_class, duration_s=ident["duration_s"], seed=ident["seed"], pop_size=ident["pop_size"],
+        n_gen=ident["n_gen"], corner=corner, progress=progress, position=position, figures=f"{folder}/fig",
+    )  # fmt: skip
+    text = json.dumps({"parameters": parameters, "information": information}, indent=1)
+    path = Path(folder) / f"class_{road_class}.json"
+    atomic_write(path, lambda tmp: Path(tmp).write_text(text))
+    return str(path)
+
+
+def _simulation(specs: list[RunSpec], fingerprint: dict, out: Path, pool: _Pool, progress: bool
+                ) -> tuple[dict[str, Path], int]:  # fmt: skip
+    """The ground-truth runs: their files by run name (simulated now unless cached), and how many
+    were simulated."""
+    runs_dir = out / "runs"
+    runs_dir.mkdir(exist_ok=True)
+    run_paths = {s.name: runs_dir / f"{s.name}-{s.key(fingerprint)}.parquet" for s in specs}
+    todo = [(s.scenario, str(run_paths[s.name])) for s in specs if not run_paths[s.name].is_file()]
+    pool.run(_simulate_to, todo, desc="ground truth", total=len(todo), unit="run", progress=progress)
+    return run_paths, len(todo)
+
+
+def _estimation(
+    config: CampaignConfig,
+    specs: list[RunSpec],
+    run_paths: dict[str, Path],
+    params_path: Path,
+    out: Path,
+    pool: _Pool,
+    progress: bool,
+) -> tuple[dict[tuple[str, str], Path], int]:
+    """Every estimator on every run: the estimate files by (estimator, run) (made now unless cached),
+    and how many were made. Runs are estimated in batches of ``config.chunk_size``."""
+    params_key = digest(
+        {
+            "classes": json.loads(Path(params_path).read_text())["classes"],
+            "code": model_fingerprint(ESTIMATION_SOURCES),
+        }
+    )
+    est_paths: dict[tuple[str, str], Path] = {}
+    tasks = []
+    for estimator in config.estimators:
+        folder = out / "estimates" / f"{estimator}-{params_key}-{config.corner}"
+        folder.mkdir(parents=True, exist_ok=True)
+        missing = []
+        for s in specs:
+            key = digest({"run": run_paths[s.name].name, "initial": s.initial_pressure_kpa})
+            path = folder / f"{s.name}-{key}.parquet"
+            est_paths[(estimator, s.name)] = path
+            if not path.is_file():
+                missing.append(s)
+        for i in range(0, len(missing), config.chunk_size):
+            chunk = missing[i : i + config.chunk_size]
+            tasks.append(
+                (
+                    estimator, str(params_path), config.corner,
+                    [str(run_paths[s.name]) for s in chunk],
+                    [str(est_paths[(estimator, s.name)]) for s in chunk],
+                    [s.initial_pressure_kpa for s in chunk],
+                    [int(s.scenario["seed"]) for s in chunk],
+                )
+            )  # fmt: skip
+    n_est = sum(len(t[3]) for t in tasks)
+    pool.run(_estimate_to, tasks, desc="estimation", total=n_est, unit="estimate", progress=progress)
+    return est_paths, n_est
+
+
+def run_campaign(config: CampaignConfig, out: str | Path, *, jobs: int = 1, progress: bool = False) -> dict:
+    """Run (or resume) the campaign in folder `out`; write metrics and the report there.
+
+    Returns the summary written to ``out/campaign.json`` (configuration, its hash, stage
+    wall times, file names).
+    """
+    if jobs < 1:
+        raise InputError(f"--jobs must be ≥ 1, got {jobs}")
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out {str(out)!r} exists and is not a folder")
+    out.mkdir(parents=True, exist_ok=True)
+    remove_stale_temporaries(out)
+    started = time.perf_counter()
+    timings: dict[str, float] = {}
+    fingerprint = model_fingerprint()
+    specs = campaign_specs(config)
+    pool = _Pool(jobs)
+    try:
+        t0 = time.perf_counter()
+        params_path, ident_info = _identification(config, out, pool, progress)
+        timings["identification_s"] = time.perf_counter() - t0
+
+        t0 = time.perf_counter()
+        run_paths, simulated = _simulation(specs, fingerprint, out, pool, progress)
+        timings["simulation_s"] = time.perf_counter() - t0
+        timings["simulated_runs"] = simulated
+
+        t0 = time.perf_counter()
+        est_paths, made = _estimation(config, specs, run_paths, params_path, out, pool, progress)
+        timings["estimation_s"] = time.perf_counter() - t0
+        timings["estimates_made"] = made
+    finally:
+        pool.close()
+
+    t0 = time.perf_counter()
+    metrics, mc_table, series = score_campaign(config, specs, run_paths, est_paths)
+    atomic_write(out / "metrics.csv", lambda tmp: metrics.to_csv(tmp, index=False, float_format="%.6g"))
+    atomic_write(out / "monte_carlo.csv", lambda tmp: mc_table.to_csv(tmp, index=False, float_format="%.6g"))
+    timings["scoring_s"] = time.perf_counter() - t0
+    summary = {
+        "config": config.model_dump(mode="json"),
+        "config_hash": digest(config.model_dump(mode="json")),
+        "model": fingerprint,
+        "identification": ident_info,
+        "params_file": str(params_path),
+        "runs": {s.name: str(run_paths[s.name].relative_to(out)) for s in specs},
+        "versions": package_versions(("suvtwin", "mujoco", "numpy", "scipy", "pymoo", "numba")),
+    }
+    summary["timings"] = timings
+    from suvtwin.pipeline.report import write_report
+
+    t0 = time.perf_counter()
+    write_report(out / "report.html", config, specs, metrics, mc_table, series, params_path, summary)
+    timings["report_s"] = time.perf_counter() - t0
+    timings["total_s"] = time.perf_counter() - started
+    atomic_write(out / "campaign.json", lambda tmp: Path(tmp).write_text(json.dumps(summary, indent=2)))
+    return summary

@@ -1,0 +1,190 @@
+"""Pass/fail evaluation of paper 000's claims against the campaign's metrics: no figures, no HTML.
+
+Usual call: ``goals = goal_table(metrics, mc_table, series, ("imm_synthetic", "joint"))``.
+
+Each claim of Brancati & Tufano 2022 §5.3–5.4 becomes a criterion on the stored results: the
+convergence time on class A and D roads (Fig. 7–8, ≤ :data:`CONVERGE_GOAL_S`), the mode
+probabilities following an A → D switch (Fig. 9), tracking a pressure drop (Fig. 10), the
+error with extra sprung mass (Fig. 11) and on a road of no ISO class (Fig. 13), and the
+Monte Carlo indexes (Fig. 6, eq. 23–25). A criterion that does not apply to an estimator
+(mode probabilities of a single model, a model bank against its single-model baseline
+:attr:`suvtwin.pipeline.estimator_registry.Estimator.single_model_baseline`) is "not
+applicable" (``pass`` None), never a failure.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from suvtwin.pipeline.estimator_registry import ESTIMATORS
+from suvtwin.pipeline.scoring import PRESSURE_TOLERANCE_KPA
+
+__all__ = ["CONVERGE_GOAL_S", "goal_table"]
+
+CONVERGE_GOAL_S = 3.0
+"""'Converges in about 2 s': pass if the error stays within ±5 % of p0 from ≤ 3 s on."""
+
+
+def _cell(value: str, ok: bool | None) -> dict:
+    return {"value": value, "pass": ok}
+
+
+def goal_table(
+    metrics: pd.DataFrame, mc_table: pd.DataFrame, series: dict, estimators: tuple[str, ...]
+) -> list:
+    """Each claim of paper 000 with its criterion and, per estimator, the measured value and pass/fail.
+
+    Returns a list of ``{"goal", "criterion", "cells": {estimator: {"value", "pass"}}}``;
+    ``pass`` is None where the criterion does not apply (e.g. mode probabilities of one UKF).
+    """
+    goals = []
+
+    def scen(run: str, estimator: str) -> pd.Series | None:
+        rows = metrics[(metrics.run == run) & (metrics.estimator == estimator)]
+        return None if rows.empty else rows.iloc[0]
+
+    for run, figure in (("class_A", "Fig. 7"), ("class_D", "Fig. 8")):
+        if not (metrics.run == run).any():
+            continue
+        cells = {}
+        for e in estimators:
+            t = scen(run, e)["time_to_converge_s"]
+            cells[e] = _cell(
+                "never" if not np.isfinite(t) else f"{t:.2f} s", bool(np.isfinite(t) and t <= CONVERGE_GOAL_S)
+            )
+        goals.append(
+            {
+                "goal": f"Converges in about 2 s on a class {run[-1]} road ({figure})",
+                "criterion": f"error within ±{PRESSURE_TOLERANCE_KPA:g} kPa (5 % of p0) "
+                f"from ≤ {CONVERGE_GOAL_S:g} s on",
+                "cells": cells,
+            }
+        )
+    if (metrics.run == "switch_A_to_D").any():
+        cells = {}
+        for e in estimators:
+            est = series["estimates"].get((e, "switch_A_to_D"))
+            if est is None or "mode_prob_A" not in est or "mode_prob_D" not in est:
+                cells[e] = _cell("—", None)
+                continue
+            t = est["t_s"].to_numpy()
+            probs = est[[f"mode_prob_{c}" for c in "ABCD" if f"mode_prob_{c}" in est]]
+            first = probs[(t >= 1.0) & (t < 5.0)].mean()
+            second = probs[t >= 6.0].mean()
+            ok = first.idxmax() == "mode_prob_A" and second.idxmax() == "mode_prob_D"
+            cells[e] = _cell(
+                f"A-road: {first.idxmax()[-1]} ({first.max():.2f}); "
+                f"D-road: {second.idxmax()[-1]} ({second.max():.2f})",
+                ok,
+            )
+        goals.append(
+            {
+                "goal": "Mode probabilities follow the road class, A then D (Fig. 9)",
+                "criterion": "most probable mode (mean over 1–5 s, 6–end) is A, then D",
+                "cells": cells,
+            }
+        )
+    if (metrics.run == "pressure_drop").any():
+        cells = {}
+        truth_t, truth = series["truth"]["pressure_drop"]
+        for e in estimators:
+            est = series["estimates"][(e, "pressure_drop")]
+            error = np.abs(est["pressure_hat_kpa"].to_numpy() - truth)
+            before = (truth_t >= 2.0) & (truth_t < 4.0)
+            after = truth_t >= 7.5
+            worst = max(error[before].max(), error[after].max())
+            cells[e] = _cell(f"max |error| {worst:.1f} kPa", bool(worst <= PRESSURE_TOLERANCE_KPA))
+        goals.append(
+            {
+                "goal": "Tracks a 230 → 180 kPa drop over 1.5 s, converged in about 2 s (Fig. 10)",
+                "criterion": f"|error| ≤ {PRESSURE_TOLERANCE_KPA:g} kPa over 2–4 s "
+                "and from 2 s after the drop ends",
+                "cells": cells,
+            }
+        )
+    for run, label in (("mass_plus_8", "+8 %"), ("mass_plus_24", "+24 %")):
+        if not (metrics.run == run).any():
+            continue
+        cells = {}
+        for e in estimators:
+            v = scen(run, e)["mean_abs_error_after_2s_pct"]
+            cells[e] = _cell(f"{v:.1f} %", bool(v < 5.0))
+        goals.append(
+            {
+                "goal": f"Mean error below 5 % with sprung mass {label}, model mass unchanged (Fig. 11)",
+                "criterion": "mean |error| / true pressure after 2 s < 5 %",
+                "cells": cells,
+            }
+        )
+    if (metrics.run == "non_iso_road").any():
+        cells = {}
+        for e in estimators:
+            v = scen("non_iso_road", e)["mean_abs_error_after_2s_pct"]
+            cells[e] = _cell(f"{v:.1f} %", bool(v < 5.0))
+        goals.append(
+            {
+                "goal": "Estimates the pressure on a road of no ISO class (Fig. 13)",
+                "criterion": "mean |error| / true pressure after 2 s < 5 %",
+                "cells": cells,
+            }
+        )
+    if not mc_table.empty:
+        end = mc_table[mc_table.t_s == mc_table.t_s.max()].set_index("estimator")
+        n = int(end["runs"].iloc[0])
+        cells = {
+            e: _cell(
+                f"{end.loc[e, 'mean_error_kpa']:+.1f} kPa",
+                bool(abs(end.loc[e, "mean_error_kpa"]) <= PRESSURE_TOLERANCE_KPA),
+            )
+            for e in estimators
+        }
+        goals.append(
+            {
+                "goal": f"Monte Carlo ({n} runs): mean error around zero (Fig. 6, eq. 23)",
+                "criterion": f"|mean error| at the end ≤ {PRESSURE_TOLERANCE_KPA:g} kPa",
+                "cells": cells,
+            }
+        )
+        cells = {}
+        for e in estimators:
+            ratio = end.loc[e, "error_std_kpa"] / end.loc[e, "sigma_bound_kpa"]
+            cells[e] = _cell(f"std / σ = {ratio:.2f}", bool(0.5 <= ratio <= 2.0))
+        goals.append(
+            {
+                "goal": "Monte Carlo: the error std converges to the filter's σ-bound (Fig. 6, eq. 24–25)",
+                "criterion": "error std / mean σ-bound at the end within 0.5–2",
+                "cells": cells,
+            }
+        )
+        cells = {}
+        for e in estimators:
+            cells[e] = _cell(
+                f"{end.loc[e, 'inside_2sigma'] * 100:.0f} %", bool(end.loc[e, "inside_2sigma"] >= 0.9)
+            )
+        goals.append(
+            {
+                "goal": "Monte Carlo: the sample errors stay within the σ-bounds (Fig. 6)",
+                "criterion": "≥ 90 % of runs inside ±2σ at the end",
+                "cells": cells,
+            }
+        )
+        cells = {}
+        for e in estimators:
+            single = ESTIMATORS[e].single_model_baseline if e in ESTIMATORS else None
+            if single is None:
+                cells[e] = _cell("—", None)
+                continue
+            if single not in end.index:
+                cells[e] = _cell("no single UKF run", None)
+                continue
+            a, b = end.loc[e, "rmse_kpa"], end.loc[single, "rmse_kpa"]
+            cells[e] = _cell(f"RMSE {a:.1f} vs {b:.1f} kPa", bool(a < b))
+        goals.append(
+            {
+                "goal": "Monte Carlo: the IMM outperforms the single UKF (Fig. 6)",
+                "criterion": "IMM RMSE at the end < single UKF's (same road input)",
+                "cells": cells,
+            }
+        )
+    return goals

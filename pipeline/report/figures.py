@@ -1,0 +1,176 @@
+"""The report's figures, as PNG data URLs: Monte Carlo indexes, scenario tracks, road PSD, draws.
+
+Usual call: ``src = monte_carlo_figure(series, ("imm_synthetic", "joint"))``; each function
+draws only from what the campaign stored (``series`` of
+:func:`suvtwin.pipeline.campaign.metrics.score_campaign`, the run specs), never re-simulates.
+Labels and colours are the registry's (:data:`suvtwin.pipeline.estimator_registry.ESTIMATORS`).
+matplotlib is imported on the first figure.
+"""
+
+from __future__ import annotations
+
+import base64
+import io
+
+import numpy as np
+
+from suvtwin.pipeline.estimator_registry import ESTIMATORS
+
+__all__ = ["draws_figure", "monte_carlo_figure", "road_psd_figure", "scenario_figure"]
+
+
+def _pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _png(fig) -> str:
+    plt = _pyplot()
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=90, bbox_inches="tight")
+    plt.close(fig)
+    return "data:image/png;base64," + base64.b64encode(buffer.getvalue()).decode()
+
+
+def monte_carlo_figure(series: dict, estimators: tuple[str, ...]) -> str:
+    """Figure 6 analog: per estimator, the Monte Carlo mean error (eq. 23), ± error std (eq. 24) and
+    ± mean σ-bound (eq. 25) over time, kPa, with ten runs' errors."""
+    n = len(estimators)
+    plt = _pyplot()
+    fig, axes = plt.subplots(n, 1, figsize=(9, 2.4 * n), sharex=True, squeeze=False)
+    for ax, e in zip(axes[:, 0], estimators, strict=True):
+        t, idx, errors = series["monte_carlo"][e]
+        step = max(1, t.size // 2000)
+        for row in errors[: min(10, errors.shape[0])]:
+            ax.plot(t[::step], row[::step], color="tab:green", lw=0.4, alpha=0.5)
+        ax.plot(t[::step], idx.mean_error[::step], color="tab:red", lw=1.5, label="mean error (eq. 23)")
+        for sign in (1, -1):
+            ax.plot(
+                t[::step],
+                sign * idx.error_std[::step],
+                "b--",
+                lw=1,
+                label="± error std (eq. 24)" if sign > 0 else None,
+            )
+            ax.plot(
+                t[::step],
+                sign * idx.sigma_bound[::step],
+                "k--",
+                lw=1,
+                label="± mean σ-bound (eq. 25)" if sign > 0 else None,
+            )
+        lim = np.nanmax(np.abs(idx.mean_error[t >= 1.0])) + 2 * np.nanmax(idx.error_std[t >= 1.0])
+        ax.set_ylim(-min(max(lim, 30.0), 400.0), min(max(lim, 30.0), 400.0))
+        ax.set_ylabel("truth − estimate, kPa")
+        ax.set_title(ESTIMATORS[e].label, fontsize=10)
+        ax.grid(alpha=0.3)
+    axes[0, 0].legend(fontsize=8, ncol=3, loc="upper right")
+    axes[-1, 0].set_xlabel("time, s")
+    fig.tight_layout()
+    return _png(fig)
+
+
+def scenario_figure(name: str, series: dict, estimators: tuple[str, ...]) -> str:
+    """Figures 7–11 analogs: the estimates of scenario run `name` with ±2σ bands against the true
+    pressure (kPa); below, the mode probabilities of the estimators that have them."""
+    t, truth = series["truth"][name]
+    imm = [e for e in estimators if ESTIMATORS[e].mode_probabilities]
+    rows = 1 + len(imm)
+    plt = _pyplot()
+    fig, axes = plt.subplots(rows, 1, figsize=(9, 3.2 + 1.8 * len(imm)), sharex=True, squeeze=False,
+                             gridspec_kw={"height_ratios": [2.2] + [1] * len(imm)})  # fmt: skip
+    ax = axes[0, 0]
+    step = max(1, t.size // 2000)
+    ax.plot(t[::step], truth[::step], "k", lw=2, label="true pressure")
+    for e in estimators:
+        est = series["estimates"][(e, name)]
+        p, s = est["pressure_hat_kpa"].to_numpy(), est["pressure_sigma_kpa"].to_numpy()
+        ax.plot(t[::step], p[::step], color=ESTIMATORS[e].color, lw=1.2, label=ESTIMATORS[e].label)
+        ax.fill_between(
+            t[::step], (p - 2 * s)[::step], (p + 2 * s)[::step], color=ESTIMATORS[e].color, alpha=0.08
+        )
+    ax.set_ylim(max(truth.min() - 150.0, -100.0), truth.max() + 150.0)
+    ax.set_ylabel("pressure, kPa")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, ncol=2, loc="lower right")
+    for ax, e in zip(axes[1:, 0], imm, strict=True):
+        est = series["estimates"][(e, name)]
+        for c, color in zip("ABCD", ("tab:blue", "tab:orange", "tab:green", "tab:red"), strict=True):
+            col = f"mode_prob_{c}"
+            if col in est:
+                prob = est[col].to_numpy()
+                # one-second moving average, as the paper's figures show
+                k = max(1, int(round(1.0 / (t[1] - t[0]))))
+                csum = np.concatenate([[0.0], np.cumsum(prob)])
+                first = np.maximum(np.arange(1, prob.size + 1) - k, 0)
+                smooth = (csum[1:] - csum[first]) / (np.arange(1, prob.size + 1) - first)  # trailing mean
+                ax.plot(t[::step], smooth[::step], color=color, lw=1.2, label=f"mode {c}")
+        ax.set_ylim(-0.02, 1.02)
+        ax.set_ylabel("mode prob.")
+        ax.set_title(f"{ESTIMATORS[e].label}: mode probabilities (trailing 1 s mean)", fontsize=9)
+        ax.legend(fontsize=7, ncol=4, loc="upper right")
+        ax.grid(alpha=0.3)
+    axes[-1, 0].set_xlabel("time, s")
+    fig.tight_layout()
+    return _png(fig)
+
+
+def road_psd_figure(x_m: np.ndarray, z_m: np.ndarray) -> str:
+    """Displacement PSD of the road a wheel drove over (elevation `z_m` at positions `x_m`, m, as the run
+    stored them), resampled to uniform spacing, against the ISO 8608 class bands (Fig. 12 analog).
+
+    A run stores the road as the tire met it (``{corner}_road_z_m``: enveloped over the contact
+    patch), so wavelengths shorter than the patch are attenuated."""
+    from suvtwin.roads.iso8608 import CLASSES, class_bounds, displacement_psd
+    from suvtwin.roads.roughness import profile_psd
+
+    order = np.argsort(x_m, kind="stable")
+    x, z = np.asarray(x_m, dtype=float)[order], np.asarray(z_m, dtype=float)[order]
+    grid = np.linspace(x[0], x[-1], x.size)
+    n, psd = profile_psd(np.interp(grid, x, z), float(grid[1] - grid[0]), segment_m=20.0)
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6.5, 4))
+    keep = n > 0
+    ax.loglog(n[keep], psd[keep], "k", lw=1, label="road under the wheel, enveloped (Welch)")
+    grid = np.logspace(-2, 1, 50)
+    for c in CLASSES[:5]:
+        lower, upper = class_bounds(c)
+        ax.fill_between(
+            grid, displacement_psd(grid, gd_n0=lower), displacement_psd(grid, gd_n0=upper), alpha=0.12
+        )
+        ax.text(0.012, displacement_psd(0.012, gd_n0=np.sqrt(lower * upper)), c, fontsize=8)
+    ax.set_xlabel("spatial frequency n, cycles/m")
+    ax.set_ylabel("Gd(n), m³")
+    ax.set_xlim(0.01, 10)
+    shown = psd[keep & (n <= 10.0) & (psd > 0)]
+    ax.set_ylim(shown.min() / 10, shown.max() * 100)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return _png(fig)
+
+
+def draws_figure(specs: list) -> str:
+    """The Monte Carlo draws (paper 000 Table 4): pressure against speed, and road level per class."""
+    mc = [s for s in specs if s.kind == "monte_carlo"]
+    plt = _pyplot()
+    fig, axes = plt.subplots(1, 2, figsize=(9, 3.2))
+    colors = {"A": "tab:blue", "B": "tab:orange", "C": "tab:green", "D": "tab:red"}
+    for s in mc:
+        c = s.info["road_class"]
+        axes[0].scatter(s.info["speed_kmh"], s.info["pressure_kpa"], color=colors[c], s=12)
+        axes[1].scatter(s.info["gd_n0_m3"], "ABCD".index(c), color=colors[c], s=12)
+    axes[0].set_xlabel("speed, km/h")
+    axes[0].set_ylabel("true pressure, kPa")
+    axes[1].set_xscale("log")
+    axes[1].set_yticks(range(4), list("ABCD"))
+    axes[1].set_xlabel("road level Gd(n0), m³ (n0 = 0.1 cycle/m)")
+    axes[1].set_ylabel("class")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    fig.tight_layout()
+    return _png(fig)
