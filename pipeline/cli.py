@@ -5,30 +5,27 @@ Usual call: ``suvtwin road --class C --length 300 --seed 7 --out road.parquet --
 No maths lives here. Bad input raises :class:`suvtwin.errors.InputError`
 somewhere below; :func:`main` prints its one-line message to stderr and returns 2,
 having written nothing.
+
+Each command imports what it needs inside it, so that ``--help`` and a command's
+start load no numerical library it does not use (``bench/startup.py`` times them).
 """
 
 from __future__ import annotations
 
 import json
 import sys
-import tomllib
 import warnings
 from enum import StrEnum
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
-import yaml
 
 from suvtwin.errors import InputError, RunError
-from suvtwin.roads.iso8608 import CLASSES, class_bounds, level_cycle_to_omega
-from suvtwin.roads.spec import (
-    MAX_SPACING_M,
-    MIN_RECOMMENDED_LENGTH_M,
-    RoadSpec,
-    SegmentSpec,
-    parse_road_spec,
-)
+from suvtwin.roads.limits import MAX_SPACING_M, MIN_RECOMMENDED_LENGTH_M
+
+if TYPE_CHECKING:
+    from suvtwin.roads.spec import RoadSpec
 
 __all__ = ["app", "main"]
 
@@ -40,6 +37,9 @@ app = typer.Typer(
         "Units: SI, except km/h and kPa where an option says so."
     ),
     add_completion=False,
+    # plain click help and errors: rich's renderer (and its markup parsing of "[...]" in help texts)
+    # more than doubles the time of `suvtwin --help`
+    rich_markup_mode=None,
     no_args_is_help=True,
     pretty_exceptions_enable=False,
     context_settings={"help_option_names": ["-h", "--help"]},
@@ -69,6 +69,10 @@ def _check_out(path: Path, option: str, suffixes: tuple[str, ...]) -> None:
 
 
 def _load_mapping(path: Path, option: str) -> object:
+    import tomllib
+
+    import yaml
+
     if not path.is_file():
         raise InputError(f"{option}: file {str(path)!r} does not exist")
     text = path.read_text()
@@ -133,6 +137,7 @@ def road_command(
 ) -> None:
     """Generate an ISO 8608 random road on two wheel tracks and write it to Parquet."""
     from suvtwin.roads.profile import generate_road, write_road
+    from suvtwin.roads.spec import parse_road_spec
 
     _check_out(out, "--out", (".parquet",))
     if plot is not None:
@@ -173,6 +178,9 @@ def _spec_from_options(
     tracks: str,
     track_correlation: float,
 ) -> RoadSpec:
+    from suvtwin.roads.iso8608 import CLASSES, class_bounds
+    from suvtwin.roads.spec import RoadSpec, SegmentSpec
+
     if road_class is None and gd_n0 is None:
         raise InputError("give --class (A–H) or --gd-n0 (m³ at 0.1 cycle/m), or --spec FILE")
     if road_class is not None and road_class.strip().upper() not in CLASSES:
@@ -226,6 +234,7 @@ def classify_command(
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of a table.")] = False,
 ) -> None:
     """Fit ISO 8608 level (w = 2 and w free) and class to each track of a road file."""
+    from suvtwin.roads.iso8608 import level_cycle_to_omega
     from suvtwin.roads.profile import read_road
     from suvtwin.roads.roughness import classify_profile
 
@@ -287,6 +296,7 @@ def simulate_command(
     """Run the MuJoCo SUV through a scenario and write its ground truth and sensor signals."""
     from suvtwin.pipeline.scenario import PRESSURE_MAX_KPA, PRESSURE_MIN_KPA, load_scenario, quick_scenario
     from suvtwin.pipeline.simulator import simulate, write_run
+    from suvtwin.roads.iso8608 import CLASSES
 
     _check_out(out, "--out", (".parquet",))
     short = {"--road-class": road_class, "--speed": speed, "--pressure": pressure, "--duration": duration,
@@ -438,6 +448,7 @@ def identify_command(
 ) -> None:
     """Fit quarter-car parameters (cs, csnl, ks, ksnl) per road class to the MuJoCo SUV (paper 000 §5.2)."""
     from suvtwin.pipeline.identification_runs import identify_classes, write_parameter_file
+    from suvtwin.roads.iso8608 import CLASSES
 
     _check_out(out, "--out", (".json",))
     letters = tuple(c.strip().upper() for c in classes.split(",") if c.strip())

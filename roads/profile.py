@@ -52,10 +52,6 @@ from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
-import pyarrow as pa
-import pyarrow.parquet as pq
-import scipy.fft
-import scipy.signal
 
 from suvtwin.errors import InputError
 from suvtwin.files import atomic_write, package_versions, read_parquet_table
@@ -138,6 +134,8 @@ def shape_filter_profile(
     noise = rng.standard_normal((n_tracks, n_samples))
     drive = noise * np.sqrt(variance * (1.0 - phi**2))
     drive[:, 0] = noise[:, 0] * np.sqrt(variance)  # stationary start z_0 ~ N(0, σ_z²)
+    import scipy.signal  # here: slow to import (scipy.stats, …) and only this generator needs it
+
     return scipy.signal.lfilter([1.0], [1.0, -phi], drive, axis=-1)
 
 
@@ -182,6 +180,8 @@ def superposition_profile(
     numpy.ndarray, shape (n_tracks, n_samples)
         Elevation, m.
     """
+    import scipy.fft
+
     n_fft = scipy.fft.next_fast_len(max(n_samples, int(np.ceil(8.0 / (n_min * spacing_m)))), real=True)
     dn = 1.0 / (n_fft * spacing_m)
     k = np.arange(n_fft // 2 + 1)
@@ -362,6 +362,9 @@ def write_road(road: Road, path: str | os.PathLike) -> None:
     ``suvtwin.road`` (JSON). The file is written to a temporary name and renamed,
     so a failure never leaves a partial file; the same road gives the same bytes.
     """
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
     table = pa.table({"x_m": road.x, "z_left_m": road.z[0], "z_right_m": road.z[1]})
     info = {
         "spec": None if road.spec is None else road.spec.model_dump(mode="json"),
@@ -383,6 +386,8 @@ def read_road(path: str | os.PathLike) -> Road:
     InputError
         If the file is missing, not Parquet, lacks a column, or holds bad values.
     """
+    import pyarrow as pa
+
     path = Path(path)
     table = read_parquet_table(path, what="road file")
     missing = [c for c in _COLUMNS if c not in table.column_names]
