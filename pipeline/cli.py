@@ -13,6 +13,7 @@ start load no numerical library it does not use (``bench/startup.py`` times them
 from __future__ import annotations
 
 import json
+import os
 import sys
 import warnings
 from enum import StrEnum
@@ -59,6 +60,15 @@ class Tracks(StrEnum):
 
 def _warn(message: str) -> None:
     typer.echo(f"suvtwin: warning: {message}", err=True)
+
+
+def _renders_nothing() -> None:
+    """Tell MuJoCo, before it is imported, that this command draws nothing (unless ``MUJOCO_GL`` is set).
+
+    With ``MUJOCO_GL`` unset, ``import mujoco`` loads GLFW, whose loader starts a Python
+    subprocess to query each libglfw it finds; ``disabled`` skips the OpenGL backends.
+    """
+    os.environ.setdefault("MUJOCO_GL", "disabled")
 
 
 def _check_out(path: Path, option: str, suffixes: tuple[str, ...]) -> None:
@@ -294,6 +304,7 @@ def simulate_command(
     progress: Annotated[bool, typer.Option(help="Show a progress bar.")] = True,
 ) -> None:
     """Run the MuJoCo SUV through a scenario and write its ground truth and sensor signals."""
+    _renders_nothing()
     from suvtwin.pipeline.scenario import PRESSURE_MAX_KPA, PRESSURE_MIN_KPA, load_scenario, quick_scenario
     from suvtwin.pipeline.simulator import simulate, write_run
     from suvtwin.roads.iso8608 import CLASSES
@@ -335,7 +346,7 @@ def simulate_command(
     write_run(result, out)
     wall = result.metadata["wall_time_s"]
     typer.echo(
-        f"wrote {out}: {len(result.table)} samples over {sc.duration_s:g} s "
+        f"wrote {out}: {result.n_samples} samples over {sc.duration_s:g} s "
         f"({sc.n_steps} steps in {wall:.2f} s, {sc.duration_s / wall:.0f}x real time)"
     )
 
@@ -447,6 +458,7 @@ def identify_command(
     progress: Annotated[bool, typer.Option(help="Show a progress bar per class.")] = True,
 ) -> None:
     """Fit quarter-car parameters (cs, csnl, ks, ksnl) per road class to the MuJoCo SUV (paper 000 §5.2)."""
+    _renders_nothing()
     from suvtwin.pipeline.identification_runs import identify_classes, write_parameter_file
     from suvtwin.roads.iso8608 import CLASSES
 
@@ -517,6 +529,7 @@ def run_command(
     estimators, metrics and a self-contained report.html in --out."""
     import time
 
+    _renders_nothing()
     from suvtwin.pipeline.campaign import preset, run_campaign
 
     if not 1 <= jobs <= 64:
