@@ -42,12 +42,9 @@ References
 
 from __future__ import annotations
 
-import hashlib
-from pathlib import Path
-
-import numba
 import numpy as np
 
+from suvtwin.jit import cached_njit
 from suvtwin.mjcf.tire import (
     I_UNLOADED_RADIUS,
     effective_rolling_radius,
@@ -56,34 +53,6 @@ from suvtwin.mjcf.tire import (
     vertical_stiffness,
 )
 from suvtwin.mjcf.vehicle import CORNERS, GRAVITY
-
-
-def _drop_stale_cache() -> None:
-    """Delete this module's numba cache when a module it inlines has changed.
-
-    numba's cache is keyed on this file alone; the kernel inlines the tire model
-    (``tire.py``) and constants from ``vehicle.py``, so a change there would
-    otherwise run stale machine code.
-    """
-    here = Path(__file__).parent
-    try:
-        digest = hashlib.sha256(
-            b"".join((here / name).read_bytes() for name in ("kernel.py", "tire.py", "vehicle.py"))
-        ).hexdigest()
-        cache = here / "__pycache__"
-        stamp = cache / "kernel.deps"
-        if stamp.is_file() and stamp.read_text() == digest:
-            return
-        for stale in cache.glob("kernel.*.nb[ic]"):
-            stale.unlink(missing_ok=True)
-        cache.mkdir(exist_ok=True)
-        stamp.write_text(digest)
-    except OSError:  # read-only install: numba then caches elsewhere or not at all
-        pass
-
-
-_drop_stale_cache()
-
 
 __all__ = [
     "CORNER_FIELDS",
@@ -277,7 +246,7 @@ def pack_vehicle(vm) -> np.ndarray:
     return out
 
 
-@numba.njit(cache=True)
+@cached_njit
 def road_height(x, y, hf, hdata):
     """Heightfield elevation at world (x, y), m: bilinear in the grid, clamped at its edges.
 
@@ -297,7 +266,7 @@ def road_height(x, y, hf, hdata):
     return hf[6] + h * hf[7]
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _envelope(cx, cy, fx, fy, half, npts, hf, hdata):
     """cos²-weighted mean road height and slope along (fx, fy) over ±half about (cx, cy)."""
     wsum, zsum, szs, sss = 0.0, 0.0, 0.0, 0.0
@@ -319,7 +288,7 @@ def _envelope(cx, cy, fx, fy, half, npts, hf, hdata):
     return zmean, szs / sss
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _damper(v, vp):
     """Damper force for compression velocity v (m/s, > 0 in bump), N; digressive, asymmetric."""
     knee = vp[V_V_KNEE]
@@ -332,7 +301,7 @@ def _damper(v, vp):
     return f if v >= 0.0 else -f
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _spring(i, s, vp):
     """Spring + stop force for compression s (m) at corner i, N (> 0 pushes the wheel down)."""
     k = vp[V_SPRING + i]
@@ -348,7 +317,7 @@ def _spring(i, s, vp):
     return f
 
 
-@numba.njit(cache=True)
+@cached_njit
 def step_kernel(
     k,
     dt,
@@ -554,7 +523,7 @@ def finish_log(
     _log_accelerations(k_last, sensordata, ids, state, log)
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _log_accelerations(row, sensordata, ids, state, log):
     """World-frame accelerations, gravity removed, from the accelerometers of step `row`.
 
