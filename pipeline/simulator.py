@@ -34,9 +34,16 @@ from suvtwin.mjcf.kernel import (
     CORNER_FIELDS,
     GLOBAL_FIELDS,
     LOG_COLUMNS,
+    M_CENTRE_X,
+    M_CENTRE_Y,
+    M_DIRECTION,
+    M_KIND,
+    M_LANE_Y,
+    M_RADIUS,
     MODE_CIRCLE,
     MODE_LANE,
     MODE_OPEN_LOOP,
+    N_MODE,
     N_STATE,
     finish_log,
     pack_ids,
@@ -147,17 +154,18 @@ def prepare(scenario: Scenario) -> _Prepared:
     pressure = np.ascontiguousarray(scenario.pressure_schedule(t))
     speed_ref = np.ascontiguousarray(scenario.speed_profile(t))
     steer_cmd = np.ascontiguousarray(scenario.steer_series(t))
-    mode = np.zeros(6)
+    mode = np.zeros(N_MODE)
     x0 = START_MARGIN_M + vehicle.chassis.a2
     y0 = scenario.steering.lane_y_m
     if scenario.steering.mode == "lane":
-        mode[:2] = MODE_LANE, y0
+        mode[M_KIND], mode[M_LANE_Y] = MODE_LANE, y0
     elif scenario.steering.mode == "circle":
         sign = 1.0 if scenario.steering.direction == "left" else -1.0
         x0 = 0.0
-        mode[:5] = MODE_CIRCLE, x0, y0 + sign * scenario.steering.radius_m, scenario.steering.radius_m, sign
+        mode[M_KIND], mode[M_DIRECTION], mode[M_RADIUS] = MODE_CIRCLE, sign, scenario.steering.radius_m
+        mode[M_CENTRE_X], mode[M_CENTRE_Y] = x0, y0 + sign * scenario.steering.radius_m
     else:
-        mode[0] = MODE_OPEN_LOOP
+        mode[M_KIND] = MODE_OPEN_LOOP
     hdata = model.hfield_data.reshape(int(vm.hfield[4]), int(vm.hfield[5]))
     # initial pose: level, at the static height over the mean road under the wheels
     corner = vehicle.corner_xy
