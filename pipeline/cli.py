@@ -62,13 +62,21 @@ def _warn(message: str) -> None:
     typer.echo(f"suvtwin: warning: {message}", err=True)
 
 
-def _renders_nothing() -> None:
-    """Tell MuJoCo, before it is imported, that this command draws nothing (unless ``MUJOCO_GL`` is set).
+def _import_mujoco_without_gl() -> None:
+    """Import MuJoCo without its OpenGL backends, for a command that draws nothing.
 
     With ``MUJOCO_GL`` unset, ``import mujoco`` loads GLFW, whose loader starts a Python
-    subprocess to query each libglfw it finds; ``disabled`` skips the OpenGL backends.
+    subprocess to query each libglfw it finds; ``MUJOCO_GL=disabled`` skips that. The
+    variable is set for this import only (the environment is left as it was), and not at
+    all when the user set it or MuJoCo is already imported.
     """
-    os.environ.setdefault("MUJOCO_GL", "disabled")
+    if "mujoco" in sys.modules or "MUJOCO_GL" in os.environ:
+        return
+    os.environ["MUJOCO_GL"] = "disabled"
+    try:
+        import mujoco  # noqa: F401
+    finally:
+        del os.environ["MUJOCO_GL"]
 
 
 def _check_out(path: Path, option: str, suffixes: tuple[str, ...]) -> None:
@@ -304,7 +312,7 @@ def simulate_command(
     progress: Annotated[bool, typer.Option(help="Show a progress bar.")] = True,
 ) -> None:
     """Run the MuJoCo SUV through a scenario and write its ground truth and sensor signals."""
-    _renders_nothing()
+    _import_mujoco_without_gl()
     from suvtwin.pipeline.scenario import PRESSURE_MAX_KPA, PRESSURE_MIN_KPA, load_scenario, quick_scenario
     from suvtwin.pipeline.simulator import simulate, write_run
     from suvtwin.roads.iso8608 import CLASSES
@@ -458,7 +466,7 @@ def identify_command(
     progress: Annotated[bool, typer.Option(help="Show a progress bar per class.")] = True,
 ) -> None:
     """Fit quarter-car parameters (cs, csnl, ks, ksnl) per road class to the MuJoCo SUV (paper 000 §5.2)."""
-    _renders_nothing()
+    _import_mujoco_without_gl()
     from suvtwin.pipeline.identification_runs import identify_classes, write_parameter_file
     from suvtwin.roads.iso8608 import CLASSES
 
@@ -529,7 +537,7 @@ def run_command(
     estimators, metrics and a self-contained report.html in --out."""
     import time
 
-    _renders_nothing()
+    _import_mujoco_without_gl()
     from suvtwin.pipeline.campaign import preset, run_campaign
 
     if not 1 <= jobs <= 64:

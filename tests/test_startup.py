@@ -8,6 +8,7 @@ libraries they stand in for.
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 
@@ -37,12 +38,16 @@ def test_simulate_loads_no_plotting_pandas_or_scipy_signal(tmp_path):
     code = (
         "from suvtwin.pipeline.cli import main\n"
         f"assert main(['simulate', '--road-class', 'C', '--speed', '60', '--pressure', '200', '--duration', "
-        f"'0.5', '--seed', '1', '--out', {str(out)!r}, '--no-progress']) == 0"
+        f"'0.5', '--seed', '1', '--out', {str(out)!r}, '--no-progress']) == 0\n"
+        "import os; assert os.environ.get('MUJOCO_GL') == GL, 'the command changed MUJOCO_GL'"
     )
-    loaded = _modules_after(code)
+    gl = os.environ.get("MUJOCO_GL")
+    loaded = _modules_after(f"GL = {gl!r}\n" + code)
     assert out.is_file()
     for heavy in ("pandas", "matplotlib", "scipy.signal", "scipy.fft", "scipy.stats", "rich"):
         assert heavy not in loaded, f"`suvtwin simulate` imports {heavy}"
+    if gl is None:  # MuJoCo imported without its OpenGL backends (GLFW's loader starts a subprocess)
+        assert "glfw" not in loaded
 
 
 def test_fast_fft_length_is_scipys_next_fast_len():
