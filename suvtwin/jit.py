@@ -69,9 +69,13 @@ def compiled_inputs(func: Callable) -> dict[str, str]:
     its globals (value: digest of bytecode, constants and names), and
     ``module.qualname:NAME`` for each global constant one of them reads (value: the
     constant as text). Attributes read from a global module (``vehicle.GRAVITY``) count too.
+    Plain Python functions of `func`'s own top-level package that it reaches are followed
+    as well (numba compiles them in when they are ``register_jitable`` or overloaded).
     """
     inputs: dict[str, str] = {}
-    todo = [getattr(func, "py_func", func)]
+    root = getattr(func, "py_func", func)
+    package = root.__module__.split(".")[0]
+    todo = [root]
     while todo:
         f = todo.pop()
         where = f"{f.__module__}.{f.__qualname__}"
@@ -90,11 +94,15 @@ def compiled_inputs(func: Callable) -> dict[str, str]:
         for module in [v for v in found.values() if isinstance(v, types.ModuleType)]:
             for name in names:
                 value = getattr(module, name, None)
-                if _is_compiled(value) or (value is not None and _constant_text(value) is not None):
+                if _is_compiled(value) or isinstance(value, types.FunctionType) or (
+                    value is not None and _constant_text(value) is not None
+                ):
                     found[f"{module.__name__}.{name}"] = value
         for name, value in sorted(found.items()):
             if _is_compiled(value):
                 todo.append(value.py_func)
+            elif isinstance(value, types.FunctionType) and value.__module__.split(".")[0] == package:
+                todo.append(value)
             elif (text := _constant_text(value)) is not None:
                 inputs[f"{where}:{name}"] = text
     return inputs

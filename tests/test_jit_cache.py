@@ -2,7 +2,8 @@
 
 numba's own cache key is the function's file and bytecode; a compiled callee or a constant
 from another module is compiled in by value, so editing that module alone would otherwise
-run stale code. Each case runs in fresh Python processes on a throw-away package.
+run stale code. Each case runs in fresh Python processes on a throw-away package (`pkg`: a
+caller in pkg/main.py, what it compiles in from pkg/dep.py).
 """
 
 from __future__ import annotations
@@ -20,20 +21,22 @@ from suvtwin.mjcf import kernel
 from suvtwin.mjcf.vehicle import GRAVITY
 
 DEP = """
+from numba.extending import register_jitable
+
 from suvtwin.jit import cached_njit
 
 SCALE = {scale}
 OFFSET = {offset}
 
 
-@cached_njit
+@{decorator}
 def scaled(x):
     return SCALE * x
 """
 
 MAIN = """
 from suvtwin.jit import cached_njit
-from dep import OFFSET, scaled
+from pkg.dep import OFFSET, scaled
 
 
 @cached_njit
@@ -41,12 +44,12 @@ def f(x):
     return scaled(x) + OFFSET
 """
 
-RUN = "import main; print(main.f(1.0), len(main.f.stats.cache_hits), len(main.f.stats.cache_misses))"
+RUN = "from pkg.main import f; print(f(1.0), len(f.stats.cache_hits), len(f.stats.cache_misses))"
 
 
-def _write_dep(folder: Path, scale: float, offset: float, stamp: int) -> None:
-    path = folder / "dep.py"
-    path.write_text(DEP.format(scale=scale, offset=offset))
+def _write_dep(folder: Path, scale: float, offset: float, stamp: int, decorator: str) -> None:
+    path = folder / "pkg" / "dep.py"
+    path.write_text(DEP.format(scale=scale, offset=offset, decorator=decorator))
     os.utime(path, (stamp, stamp))  # a distinct modification time, whatever the clock's resolution
 
 
@@ -60,18 +63,21 @@ def _run(folder: Path) -> tuple[float, int, int]:
 
 
 @pytest.mark.parametrize(
-    "change",
+    ("decorator", "change"),
     [
-        {"scale": 5.0, "offset": 1.0},  # the callee's constant: its module's file changes, the caller's not
-        {"scale": 2.0, "offset": 7.0},  # a constant the caller reads from another module
+        ("cached_njit", {"scale": 5.0, "offset": 1.0}),  # a compiled callee's constant
+        ("cached_njit", {"scale": 2.0, "offset": 7.0}),  # a constant the caller reads from another module
+        ("register_jitable", {"scale": 5.0, "offset": 1.0}),  # a plain function numba compiles in
     ],
 )
-def test_changing_another_module_recompiles_the_caller(tmp_path, change):
-    (tmp_path / "main.py").write_text(textwrap.dedent(MAIN))
-    _write_dep(tmp_path, 2.0, 1.0, stamp=1_700_000_000)
+def test_changing_another_module_recompiles_the_caller(tmp_path, decorator, change):
+    (tmp_path / "pkg").mkdir()
+    (tmp_path / "pkg" / "__init__.py").write_text("")
+    (tmp_path / "pkg" / "main.py").write_text(textwrap.dedent(MAIN))
+    _write_dep(tmp_path, 2.0, 1.0, stamp=1_700_000_000, decorator=decorator)
     assert _run(tmp_path) == (3.0, 0, 1)  # compiled and saved
     assert _run(tmp_path) == (3.0, 1, 0)  # loaded from the cache
-    _write_dep(tmp_path, change["scale"], change["offset"], stamp=1_700_000_100)
+    _write_dep(tmp_path, change["scale"], change["offset"], stamp=1_700_000_100, decorator=decorator)
     value, hits, _ = _run(tmp_path)
     assert value == change["scale"] * 1.0 + change["offset"]
     assert hits == 0
