@@ -55,6 +55,15 @@ def _constant_text(value: object) -> str | None:
     return None
 
 
+def _const_text(const: object) -> str:
+    """repr of a code object's constant, the same in every process (set order varies with hashing)."""
+    if isinstance(const, frozenset):
+        return "frozenset(" + ",".join(sorted(_const_text(c) for c in const)) + ")"
+    if isinstance(const, tuple):
+        return "(" + ",".join(_const_text(c) for c in const) + ")"
+    return repr(const)
+
+
 def _code_objects(code: types.CodeType):
     yield code
     for const in code.co_consts:
@@ -85,7 +94,8 @@ def compiled_inputs(func: Callable) -> dict[str, str]:
         names: set[str] = set()
         for code in _code_objects(f.__code__):
             h.update(code.co_code)
-            h.update(repr([c for c in code.co_consts if not isinstance(c, types.CodeType)]).encode())
+            consts = tuple(c for c in code.co_consts if not isinstance(c, types.CodeType))
+            h.update(_const_text(consts).encode())
             h.update(repr((code.co_names, code.co_varnames, code.co_freevars)).encode())
             names.update(code.co_names)
         h.update(repr(f.__defaults__).encode())

@@ -90,3 +90,20 @@ def test_the_kernel_key_covers_the_tyre_model_and_vehicle_constants():
         assert f"suvtwin.mjcf.tire.{callee}" in inputs
     assert "suvtwin.mjcf.kernel._log_accelerations" in inputs
     assert inputs["suvtwin.mjcf.kernel._log_accelerations:GRAVITY"] == f"float:{GRAVITY!r}"
+
+
+def test_the_key_is_the_same_in_every_process():
+    """Set constants print in an order that depends on string hashing; the key must not."""
+    code = (
+        "from suvtwin.jit import compiled_inputs\n"
+        "def f(x):\n"
+        "    return x in {'alpha', 'beta', 'gamma', 'delta', 'epsilon'}\n"
+        "print(sorted(compiled_inputs(f).items()))"
+    )
+    outputs = set()
+    for seed in ("1", "2", "3"):
+        env = {**os.environ, "PYTHONHASHSEED": seed}
+        done = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+        outputs.add(done.stdout)
+    assert len(outputs) == 1
