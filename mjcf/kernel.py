@@ -42,12 +42,11 @@ References
 
 from __future__ import annotations
 
-import hashlib
-from pathlib import Path
+from collections import namedtuple
 
-import numba
 import numpy as np
 
+from suvtwin.jit import cached_njit
 from suvtwin.mjcf.tire import (
     I_UNLOADED_RADIUS,
     effective_rolling_radius,
@@ -57,41 +56,19 @@ from suvtwin.mjcf.tire import (
 )
 from suvtwin.mjcf.vehicle import CORNERS, GRAVITY
 
-
-def _drop_stale_cache() -> None:
-    """Delete this module's numba cache when a module it inlines has changed.
-
-    numba's cache is keyed on this file alone; the kernel inlines the tire model
-    (``tire.py``) and constants from ``vehicle.py``, so a change there would
-    otherwise run stale machine code.
-    """
-    here = Path(__file__).parent
-    try:
-        digest = hashlib.sha256(
-            b"".join((here / name).read_bytes() for name in ("kernel.py", "tire.py", "vehicle.py"))
-        ).hexdigest()
-        cache = here / "__pycache__"
-        stamp = cache / "kernel.deps"
-        if stamp.is_file() and stamp.read_text() == digest:
-            return
-        for stale in cache.glob("kernel.*.nb[ic]"):
-            stale.unlink(missing_ok=True)
-        cache.mkdir(exist_ok=True)
-        stamp.write_text(digest)
-    except OSError:  # read-only install: numba then caches elsewhere or not at all
-        pass
-
-
-_drop_stale_cache()
-
-
 __all__ = [
     "CORNER_FIELDS",
     "GLOBAL_FIELDS",
+    "ID_BLOCKS",
     "LOG_COLUMNS",
+    "MODE_BLOCKS",
     "MODE_CIRCLE",
     "MODE_LANE",
     "MODE_OPEN_LOOP",
+    "N_MODE",
+    "N_STATE",
+    "STATE_BLOCKS",
+    "VEHICLE_BLOCKS",
     "finish_log",
     "pack_ids",
     "pack_vehicle",
@@ -100,6 +77,21 @@ __all__ = [
 ]
 
 MODE_LANE, MODE_CIRCLE, MODE_OPEN_LOOP = 0, 1, 2
+"""Steering modes (``mode[M_KIND]``): lane keeping, a circle, an open-loop angle series."""
+
+
+def _layout(typename: str, blocks: tuple[tuple[str, int], ...]) -> tuple[tuple, int]:
+    """First index of each block of a packed array, by name, and the array's length.
+
+    `blocks` lists ``(name, width)`` in array order; the first index of a block is the sum
+    of the widths before it. Returns a named tuple of first indices and the total width.
+    """
+    first, size = {}, 0
+    for name, width in blocks:
+        first[name] = size
+        size += width
+    return namedtuple(typename, first)(**first), size
+
 
 GLOBAL_FIELDS = (
     "t_s",
@@ -138,105 +130,158 @@ CORNER_FIELDS = (
 LOG_COLUMNS = GLOBAL_FIELDS + tuple(f"{c}_{f}" for f in CORNER_FIELDS for c in CORNERS)
 """Column names of the raw step log: globals, then each corner field for fl, fr, rl, rr."""
 
+# ---- slots of the packed arrays. The compiled functions index them with the module-level
+# ints below, which numba compiles in as constants; every number is derived from a field list.
+
 _NG = len(GLOBAL_FIELDS)
-# first column of each corner field (corner i adds i)
-(
-    C_ACC_SPRUNG,
-    C_ACC_UNSPRUNG,
-    C_Z_SPRUNG,
-    C_Z_UNSPRUNG,
-    C_V_SPRUNG,
-    C_V_UNSPRUNG,
-    C_ROAD_Z,
-    C_PRESSURE,
-    C_KT,
-    C_FZ,
-    C_FX,
-    C_FY,
-    C_KAPPA,
-    C_ALPHA,
-    C_DEFLECTION,
-    C_SUSP_FORCE,
-    C_SUSP_TRAVEL,
-    C_WHEEL_SPEED,
-) = range(_NG, _NG + 4 * len(CORNER_FIELDS), 4)
+G_T, G_SPEED, G_STEER = (GLOBAL_FIELDS.index(f) for f in ("t_s", "speed_mps", "steer_rad"))
+G_LAT_ACCEL, G_LONG_ACCEL = (GLOBAL_FIELDS.index(f) for f in ("lat_accel_mps2", "long_accel_mps2"))
+G_YAW_RATE, G_HEAVE = (GLOBAL_FIELDS.index(f) for f in ("yaw_rate_radps", "heave_m"))
+G_PITCH, G_ROLL, G_YAW = (GLOBAL_FIELDS.index(f) for f in ("pitch_rad", "roll_rad", "yaw_rad"))
+G_X, G_Y = (GLOBAL_FIELDS.index(f) for f in ("x_m", "y_m"))
 
-# ---- packed integer ids (pack_ids) ----
-I_CHASSIS_BODY, I_CHASSIS_QPOS, I_CHASSIS_DOF = 0, 1, 2
-I_CARRIER, I_KNUCKLE, I_WHEEL = 3, 7, 11
-I_SUSP_QPOS, I_SUSP_DOF, I_SPIN_DOF = 15, 19, 23
-I_STEER_ACT, I_DRIVE_ACT = 27, 29
-I_ACC_SPRUNG, I_ACC_UNSPRUNG, I_ACC_IMU = 33, 37, 41
-I_RING_QPOS, I_RING_DOF = 42, 46  # native contact only (-1 otherwise)
-N_IDS = 50
 
-# ---- packed vehicle parameters (pack_vehicle) ----
-V_PRELOAD, V_SPRING = 0, 4  # per corner
-V_WHEEL_Z = 8  # per corner: design wheel-centre z relative to chassis CoG, m
-(
-    V_PROGRESSION,
-    V_BUMP_CLEAR,
-    V_BUMP_LIN,
-    V_BUMP_QUAD,
-    V_REB_CLEAR,
-    V_REB_LIN,
-    V_REB_QUAD,
-    V_C_COMP_LOW,
-    V_C_COMP_HIGH,
-    V_C_REB_LOW,
-    V_C_REB_HIGH,
-    V_V_KNEE,
-    V_ARB_F,
-    V_ARB_R,
-    V_WHEELBASE,
-    V_TRACK_F,
-    V_A2,
-    V_MAX_STEER,
-    V_SIGMA_X,
-    V_SIGMA_Y,
-    V_ROLL_RES,
-    V_ENV_HALF,
-    V_ENV_N,
-    V_DRAG,
-    V_KP_SPEED,
-    V_KI_SPEED,
-    V_MAX_DRIVE,
-    V_MAX_BRAKE,
-    V_PREVIEW_T,
-    V_PREVIEW_MIN,
-    V_COG_HEIGHT,
-    V_CONTACT_NATIVE,
-) = range(12, 44)
-N_VEHICLE = 44
+def _corner_column(field: str) -> int:
+    """Log column of `field` at the front-left corner; corner i (fl, fr, rl, rr) adds i."""
+    return _NG + len(CORNERS) * CORNER_FIELDS.index(field)
 
-# ---- state scratch ----
-S_INTEGRAL = 0
-S_SLIP_U = 1  # 4: longitudinal tyre deflection (relaxation), m
-S_SLIP_V = 5  # 4: lateral tyre deflection (relaxation), m
-S_R_PREV = 9  # 9: chassis rotation matrix of the previous step
-S_STEER = 18
-N_STATE = 19
+
+C_ACC_SPRUNG = _corner_column("accel_sprung_true_mps2")
+C_ACC_UNSPRUNG = _corner_column("accel_unsprung_true_mps2")
+C_Z_SPRUNG = _corner_column("z_sprung_m")
+C_Z_UNSPRUNG = _corner_column("z_unsprung_m")
+C_V_SPRUNG = _corner_column("v_sprung_mps")
+C_V_UNSPRUNG = _corner_column("v_unsprung_mps")
+C_ROAD_Z = _corner_column("road_z_m")
+C_PRESSURE = _corner_column("pressure_pa")
+C_KT = _corner_column("tire_stiffness_npm")
+C_FZ = _corner_column("tire_fz_n")
+C_FX = _corner_column("tire_fx_n")
+C_FY = _corner_column("tire_fy_n")
+C_KAPPA = _corner_column("tire_slip_ratio")
+C_ALPHA = _corner_column("tire_slip_angle_rad")
+C_DEFLECTION = _corner_column("tire_deflection_m")
+C_SUSP_FORCE = _corner_column("susp_force_n")
+C_SUSP_TRAVEL = _corner_column("susp_travel_m")
+C_WHEEL_SPEED = _corner_column("wheel_speed_radps")
+
+ID_BLOCKS = (
+    ("chassis_body", 1),
+    ("chassis_qpos", 1),
+    ("chassis_dof", 1),
+    ("carrier_body", 4),
+    ("knuckle_body", 4),
+    ("wheel_body", 4),
+    ("susp_qpos", 4),
+    ("susp_dof", 4),
+    ("spin_dof", 4),
+    ("steer_act", 2),
+    ("drive_act", 4),
+    ("acc_sprung", 4),
+    ("acc_unsprung", 4),
+    ("acc_imu", 1),
+    ("ring_qpos", 4),  # native contact only (-1 otherwise)
+    ("ring_dof", 4),  # native contact only (-1 otherwise)
+)
+"""Blocks of the packed integer ids (:func:`pack_ids`): the builder's id names and their widths."""
+IDS, N_IDS = _layout("IdSlots", ID_BLOCKS)
+I_CHASSIS_BODY, I_CHASSIS_QPOS, I_CHASSIS_DOF = IDS.chassis_body, IDS.chassis_qpos, IDS.chassis_dof
+I_CARRIER, I_KNUCKLE, I_WHEEL = IDS.carrier_body, IDS.knuckle_body, IDS.wheel_body
+I_SUSP_QPOS, I_SUSP_DOF, I_SPIN_DOF = IDS.susp_qpos, IDS.susp_dof, IDS.spin_dof
+I_STEER_ACT, I_DRIVE_ACT = IDS.steer_act, IDS.drive_act
+I_ACC_SPRUNG, I_ACC_UNSPRUNG, I_ACC_IMU = IDS.acc_sprung, IDS.acc_unsprung, IDS.acc_imu
+I_RING_QPOS, I_RING_DOF = IDS.ring_qpos, IDS.ring_dof
+
+VEHICLE_BLOCKS = (
+    ("preload", 4),  # per corner: spring preload, N
+    ("spring", 4),  # per corner: spring rate, N/m
+    ("wheel_z", 4),  # per corner: design wheel-centre z relative to chassis CoG, m
+    ("progression", 1),
+    ("bump_clear", 1),
+    ("bump_lin", 1),
+    ("bump_quad", 1),
+    ("reb_clear", 1),
+    ("reb_lin", 1),
+    ("reb_quad", 1),
+    ("c_comp_low", 1),
+    ("c_comp_high", 1),
+    ("c_reb_low", 1),
+    ("c_reb_high", 1),
+    ("v_knee", 1),
+    ("arb_f", 1),
+    ("arb_r", 1),
+    ("wheelbase", 1),
+    ("track_f", 1),
+    ("a2", 1),
+    ("max_steer", 1),
+    ("sigma_x", 1),
+    ("sigma_y", 1),
+    ("roll_res", 1),
+    ("env_half", 1),
+    ("env_n", 1),
+    ("drag", 1),
+    ("kp_speed", 1),
+    ("ki_speed", 1),
+    ("max_drive", 1),
+    ("max_brake", 1),
+    ("preview_t", 1),
+    ("preview_min", 1),
+    ("cog_height", 1),
+    ("contact_native", 1),
+)
+"""Blocks of the packed vehicle and driver parameters (:func:`pack_vehicle`), SI units."""
+VEHICLE, N_VEHICLE = _layout("VehicleSlots", VEHICLE_BLOCKS)
+V_PRELOAD, V_SPRING, V_WHEEL_Z = VEHICLE.preload, VEHICLE.spring, VEHICLE.wheel_z
+V_PROGRESSION = VEHICLE.progression
+V_BUMP_CLEAR, V_BUMP_LIN, V_BUMP_QUAD = VEHICLE.bump_clear, VEHICLE.bump_lin, VEHICLE.bump_quad
+V_REB_CLEAR, V_REB_LIN, V_REB_QUAD = VEHICLE.reb_clear, VEHICLE.reb_lin, VEHICLE.reb_quad
+V_C_COMP_LOW, V_C_COMP_HIGH = VEHICLE.c_comp_low, VEHICLE.c_comp_high
+V_C_REB_LOW, V_C_REB_HIGH = VEHICLE.c_reb_low, VEHICLE.c_reb_high
+V_V_KNEE = VEHICLE.v_knee
+V_ARB_F, V_ARB_R = VEHICLE.arb_f, VEHICLE.arb_r
+V_WHEELBASE, V_TRACK_F, V_A2 = VEHICLE.wheelbase, VEHICLE.track_f, VEHICLE.a2
+V_MAX_STEER = VEHICLE.max_steer
+V_SIGMA_X, V_SIGMA_Y = VEHICLE.sigma_x, VEHICLE.sigma_y
+V_ROLL_RES = VEHICLE.roll_res
+V_ENV_HALF, V_ENV_N = VEHICLE.env_half, VEHICLE.env_n
+V_DRAG = VEHICLE.drag
+V_KP_SPEED, V_KI_SPEED = VEHICLE.kp_speed, VEHICLE.ki_speed
+V_MAX_DRIVE, V_MAX_BRAKE = VEHICLE.max_drive, VEHICLE.max_brake
+V_PREVIEW_T, V_PREVIEW_MIN = VEHICLE.preview_t, VEHICLE.preview_min
+V_COG_HEIGHT = VEHICLE.cog_height
+V_CONTACT_NATIVE = VEHICLE.contact_native
+
+STATE_BLOCKS = (
+    ("integral", 1),  # integral of the speed error, m
+    ("slip_u", 4),  # per corner: longitudinal tyre deflection (relaxation), m
+    ("slip_v", 4),  # per corner: lateral tyre deflection (relaxation), m
+    ("r_prev", 9),  # chassis rotation matrix of the previous step, row-major
+    ("steer", 1),  # road-wheel angle of the bicycle model, rad
+)
+"""Blocks of the kernel's scratch state, carried from step to step."""
+STATE, N_STATE = _layout("StateSlots", STATE_BLOCKS)
+S_INTEGRAL, S_SLIP_U, S_SLIP_V = STATE.integral, STATE.slip_u, STATE.slip_v
+S_R_PREV, S_STEER = STATE.r_prev, STATE.steer
+
+MODE_BLOCKS = (
+    ("kind", 1),  # MODE_LANE, MODE_CIRCLE or MODE_OPEN_LOOP
+    ("lane_y_or_centre_x", 1),  # lane: y of the lane, m; circle: x of its centre, m
+    ("centre_y", 1),  # circle: y of its centre, m
+    ("radius", 1),  # circle: radius, m
+    ("direction", 1),  # circle: +1 left (counter-clockwise), -1 right
+)
+"""Blocks of the steering-mode array (``mode``) the simulator packs."""
+MODE, N_MODE = _layout("ModeSlots", MODE_BLOCKS)
+M_KIND, M_LANE_Y, M_CENTRE_X = MODE.kind, MODE.lane_y_or_centre_x, MODE.lane_y_or_centre_x
+M_CENTRE_Y, M_RADIUS, M_DIRECTION = MODE.centre_y, MODE.radius, MODE.direction
 
 
 def pack_ids(ids: dict) -> np.ndarray:
-    """Pack the builder's id dict (plus the IMU sensor adr) into the int64 layout above."""
+    """Pack the builder's id dict (:data:`ID_BLOCKS` names) into the int64 layout above."""
     out = np.zeros(N_IDS, dtype=np.int64)
-    out[I_CHASSIS_BODY] = ids["chassis_body"][0]
-    out[I_CHASSIS_QPOS] = ids["chassis_qpos"][0]
-    out[I_CHASSIS_DOF] = ids["chassis_dof"][0]
-    out[I_CARRIER : I_CARRIER + 4] = ids["carrier_body"]
-    out[I_KNUCKLE : I_KNUCKLE + 4] = ids["knuckle_body"]
-    out[I_WHEEL : I_WHEEL + 4] = ids["wheel_body"]
-    out[I_SUSP_QPOS : I_SUSP_QPOS + 4] = ids["susp_qpos"]
-    out[I_SUSP_DOF : I_SUSP_DOF + 4] = ids["susp_dof"]
-    out[I_SPIN_DOF : I_SPIN_DOF + 4] = ids["spin_dof"]
-    out[I_STEER_ACT : I_STEER_ACT + 2] = ids["steer_act"]
-    out[I_DRIVE_ACT : I_DRIVE_ACT + 4] = ids["drive_act"]
-    out[I_ACC_SPRUNG : I_ACC_SPRUNG + 4] = ids["acc_sprung"]
-    out[I_ACC_UNSPRUNG : I_ACC_UNSPRUNG + 4] = ids["acc_unsprung"]
-    out[I_ACC_IMU] = ids["acc_imu"][0]
-    out[I_RING_QPOS : I_RING_QPOS + 4] = ids["ring_qpos"]
-    out[I_RING_DOF : I_RING_DOF + 4] = ids["ring_dof"]
+    for name, width in ID_BLOCKS:
+        first = getattr(IDS, name)
+        out[first : first + width] = ids[name]
     return out
 
 
@@ -277,7 +322,7 @@ def pack_vehicle(vm) -> np.ndarray:
     return out
 
 
-@numba.njit(cache=True)
+@cached_njit
 def road_height(x, y, hf, hdata):
     """Heightfield elevation at world (x, y), m: bilinear in the grid, clamped at its edges.
 
@@ -297,7 +342,7 @@ def road_height(x, y, hf, hdata):
     return hf[6] + h * hf[7]
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _envelope(cx, cy, fx, fy, half, npts, hf, hdata):
     """cos²-weighted mean road height and slope along (fx, fy) over ±half about (cx, cy)."""
     wsum, zsum, szs, sss = 0.0, 0.0, 0.0, 0.0
@@ -319,7 +364,7 @@ def _envelope(cx, cy, fx, fy, half, npts, hf, hdata):
     return zmean, szs / sss
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _damper(v, vp):
     """Damper force for compression velocity v (m/s, > 0 in bump), N; digressive, asymmetric."""
     knee = vp[V_V_KNEE]
@@ -332,7 +377,7 @@ def _damper(v, vp):
     return f if v >= 0.0 else -f
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _spring(i, s, vp):
     """Spring + stop force for compression s (m) at corner i, N (> 0 pushes the wheel down)."""
     k = vp[V_SPRING + i]
@@ -348,7 +393,7 @@ def _spring(i, s, vp):
     return f
 
 
-@numba.njit(cache=True)
+@cached_njit
 def step_kernel(
     k,
     dt,
@@ -376,7 +421,7 @@ def step_kernel(
 
     Also completes row k-1 with the accelerations MuJoCo computed in the previous
     ``mj_step2``. Shapes: `pressure` (nstep, 4) Pa, `speed_ref` (nstep,) m/s,
-    `steer_cmd` (nstep,) rad, `mode` (6,) = (kind, lane_y or cx, cy, radius, direction, 0),
+    `steer_cmd` (nstep,) rad, `mode` (N_MODE,) laid out as :data:`MODE_BLOCKS`,
     `log` (nstep, len(LOG_COLUMNS)).
     """
     cb = ids[I_CHASSIS_BODY]
@@ -413,16 +458,17 @@ def step_kernel(
 
     # ---- driver: steering (road-wheel angle of the bicycle model) ----
     wb = vp[V_WHEELBASE]
-    if mode[0] == MODE_OPEN_LOOP:
+    if mode[M_KIND] == MODE_OPEN_LOOP:
         delta = steer_cmd[k]
     else:
         rx, ry = px - vp[V_A2] * hx, py - vp[V_A2] * hy  # rear-axle centre
         look = max(vp[V_PREVIEW_MIN], abs(speed) * vp[V_PREVIEW_T])
-        if mode[0] == MODE_LANE:
-            tx, ty = rx + look, mode[1]
+        if mode[M_KIND] == MODE_LANE:
+            tx, ty = rx + look, mode[M_LANE_Y]
         else:
-            theta = np.arctan2(ry - mode[2], rx - mode[1]) + mode[4] * look / mode[3]
-            tx, ty = mode[1] + mode[3] * np.cos(theta), mode[2] + mode[3] * np.sin(theta)
+            ocx, ocy, radius = mode[M_CENTRE_X], mode[M_CENTRE_Y], mode[M_RADIUS]
+            theta = np.arctan2(ry - ocy, rx - ocx) + mode[M_DIRECTION] * look / radius
+            tx, ty = ocx + radius * np.cos(theta), ocy + radius * np.sin(theta)
         eta = np.arctan2(ty - ry, tx - rx) - yaw
         eta = np.arctan2(np.sin(eta), np.cos(eta))
         dist = np.hypot(tx - rx, ty - ry)
@@ -535,16 +581,16 @@ def step_kernel(
     xfrc_applied[cb, 1] = -vp[V_DRAG] * vh * vy
 
     # ---- globals ----
-    log[k, 0] = k * dt
-    log[k, 1] = speed
-    log[k, 2] = delta
-    log[k, 5] = wz
-    log[k, 6] = pz - vp[V_COG_HEIGHT]
-    log[k, 7] = np.arcsin(min(max(-R[2, 0], -1.0), 1.0))
-    log[k, 8] = np.arctan2(R[2, 1], R[2, 2])
-    log[k, 9] = yaw
-    log[k, 10] = px
-    log[k, 11] = py
+    log[k, G_T] = k * dt
+    log[k, G_SPEED] = speed
+    log[k, G_STEER] = delta
+    log[k, G_YAW_RATE] = wz
+    log[k, G_HEAVE] = pz - vp[V_COG_HEIGHT]
+    log[k, G_PITCH] = np.arcsin(min(max(-R[2, 0], -1.0), 1.0))
+    log[k, G_ROLL] = np.arctan2(R[2, 1], R[2, 2])
+    log[k, G_YAW] = yaw
+    log[k, G_X] = px
+    log[k, G_Y] = py
 
 
 def finish_log(
@@ -554,7 +600,7 @@ def finish_log(
     _log_accelerations(k_last, sensordata, ids, state, log)
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _log_accelerations(row, sensordata, ids, state, log):
     """World-frame accelerations, gravity removed, from the accelerometers of step `row`.
 
@@ -574,5 +620,5 @@ def _log_accelerations(row, sensordata, ids, state, log):
     ax = Rp[0, 0] * a0 + Rp[0, 1] * a1 + Rp[0, 2] * a2
     ay = Rp[1, 0] * a0 + Rp[1, 1] * a1 + Rp[1, 2] * a2
     pyaw = np.arctan2(Rp[1, 0], Rp[0, 0])
-    log[row, 3] = -np.sin(pyaw) * ax + np.cos(pyaw) * ay
-    log[row, 4] = np.cos(pyaw) * ax + np.sin(pyaw) * ay
+    log[row, G_LAT_ACCEL] = -np.sin(pyaw) * ax + np.cos(pyaw) * ay
+    log[row, G_LONG_ACCEL] = np.cos(pyaw) * ax + np.sin(pyaw) * ay

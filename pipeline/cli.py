@@ -5,31 +5,29 @@ Usual call: ``suvtwin road --class C --length 300 --seed 7 --out road.parquet --
 No maths lives here. Bad input raises :class:`suvtwin.errors.InputError`
 somewhere below; :func:`main` prints its one-line message to stderr and returns 2,
 having written nothing.
+
+Each command imports what it needs inside it, so that ``--help`` and a command's
+start load no numerical library it does not use (``bench/startup.py`` times them).
 """
 
 from __future__ import annotations
 
 import json
+import os
 import sys
-import tomllib
 import warnings
 from enum import StrEnum
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
-import yaml
 
 from suvtwin.errors import InputError, RunError
 from suvtwin.pipeline.estimator_registry import estimator_families, estimator_help, road_inputs
-from suvtwin.roads.iso8608 import CLASSES, class_bounds, level_cycle_to_omega
-from suvtwin.roads.spec import (
-    MAX_SPACING_M,
-    MIN_RECOMMENDED_LENGTH_M,
-    RoadSpec,
-    SegmentSpec,
-    parse_road_spec,
-)
+from suvtwin.roads.limits import MAX_SPACING_M, MIN_RECOMMENDED_LENGTH_M
+
+if TYPE_CHECKING:
+    from suvtwin.roads.spec import RoadSpec
 
 __all__ = ["app", "main"]
 
@@ -41,6 +39,9 @@ app = typer.Typer(
         "Units: SI, except km/h and kPa where an option says so."
     ),
     add_completion=False,
+    # plain click help and errors: rich's renderer (and its markup parsing of "[...]" in help texts)
+    # more than doubles the time of `suvtwin --help`
+    rich_markup_mode=None,
     no_args_is_help=True,
     pretty_exceptions_enable=False,
     context_settings={"help_option_names": ["-h", "--help"]},
@@ -62,6 +63,23 @@ def _warn(message: str) -> None:
     typer.echo(f"suvtwin: warning: {message}", err=True)
 
 
+def _import_mujoco_without_gl() -> None:
+    """Import MuJoCo without its OpenGL backends, for a command that draws nothing.
+
+    With ``MUJOCO_GL`` unset, ``import mujoco`` loads GLFW, whose loader starts a Python
+    subprocess to query each libglfw it finds; ``MUJOCO_GL=disabled`` skips that. The
+    variable is set for this import only (the environment is left as it was), and not at
+    all when the user set it or MuJoCo is already imported.
+    """
+    if "mujoco" in sys.modules or "MUJOCO_GL" in os.environ:
+        return
+    os.environ["MUJOCO_GL"] = "disabled"
+    try:
+        import mujoco  # noqa: F401
+    finally:
+        del os.environ["MUJOCO_GL"]
+
+
 def _check_out(path: Path, option: str, suffixes: tuple[str, ...]) -> None:
     if path.suffix.lower() not in suffixes:
         raise InputError(f"{option} must end in {' or '.join(suffixes)}, got {str(path)!r}")
@@ -70,6 +88,10 @@ def _check_out(path: Path, option: str, suffixes: tuple[str, ...]) -> None:
 
 
 def _load_mapping(path: Path, option: str) -> object:
+    import tomllib
+
+    import yaml
+
     if not path.is_file():
         raise InputError(f"{option}: file {str(path)!r} does not exist")
     text = path.read_text()
@@ -134,6 +156,7 @@ def road_command(
 ) -> None:
     """Generate an ISO 8608 random road on two wheel tracks and write it to Parquet."""
     from suvtwin.roads.profile import generate_road, write_road
+    from suvtwin.roads.spec import parse_road_spec
 
     _check_out(out, "--out", (".parquet",))
     if plot is not None:
@@ -174,6 +197,9 @@ def _spec_from_options(
     tracks: str,
     track_correlation: float,
 ) -> RoadSpec:
+    from suvtwin.roads.iso8608 import CLASSES, class_bounds
+    from suvtwin.roads.spec import RoadSpec, SegmentSpec
+
     if road_class is None and gd_n0 is None:
         raise InputError("give --class (A–H) or --gd-n0 (m³ at 0.1 cycle/m), or --spec FILE")
     if road_class is not None and road_class.strip().upper() not in CLASSES:
@@ -227,6 +253,7 @@ def classify_command(
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of a table.")] = False,
 ) -> None:
     """Fit ISO 8608 level (w = 2 and w free) and class to each track of a road file."""
+    from suvtwin.roads.iso8608 import level_cycle_to_omega
     from suvtwin.roads.profile import read_road
     from suvtwin.roads.roughness import classify_profile
 
@@ -286,8 +313,10 @@ def simulate_command(
     progress: Annotated[bool, typer.Option(help="Show a progress bar.")] = True,
 ) -> None:
     """Run the MuJoCo SUV through a scenario and write its ground truth and sensor signals."""
+    _import_mujoco_without_gl()
     from suvtwin.pipeline.scenario import PRESSURE_MAX_KPA, PRESSURE_MIN_KPA, load_scenario, quick_scenario
     from suvtwin.pipeline.simulator import simulate, write_run
+    from suvtwin.roads.iso8608 import CLASSES
 
     _check_out(out, "--out", (".parquet",))
     short = {"--road-class": road_class, "--speed": speed, "--pressure": pressure, "--duration": duration,
@@ -326,7 +355,7 @@ def simulate_command(
     write_run(result, out)
     wall = result.metadata["wall_time_s"]
     typer.echo(
-        f"wrote {out}: {len(result.table)} samples over {sc.duration_s:g} s "
+        f"wrote {out}: {result.n_samples} samples over {sc.duration_s:g} s "
         f"({sc.n_steps} steps in {wall:.2f} s, {sc.duration_s / wall:.0f}x real time)"
     )
 
@@ -432,7 +461,9 @@ def identify_command(
     progress: Annotated[bool, typer.Option(help="Show a progress bar per class.")] = True,
 ) -> None:
     """Fit quarter-car parameters (cs, csnl, ks, ksnl) per road class to the MuJoCo SUV (paper 000 §5.2)."""
+    _import_mujoco_without_gl()
     from suvtwin.pipeline.identification_runs import identify_classes, write_parameter_file
+    from suvtwin.roads.iso8608 import CLASSES
 
     _check_out(out, "--out", (".json",))
     letters = tuple(c.strip().upper() for c in classes.split(",") if c.strip())
@@ -501,6 +532,7 @@ def run_command(
     estimators, metrics and a self-contained report.html in --out."""
     import time
 
+    _import_mujoco_without_gl()
     from suvtwin.pipeline.campaign import preset, run_campaign
 
     if not 1 <= jobs <= 64:

@@ -19,7 +19,6 @@ from pathlib import Path
 from typing import Literal
 
 import numpy as np
-import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from suvtwin.errors import InputError
@@ -246,6 +245,8 @@ def parse_scenario(data: object, *, source: str = "scenario") -> Scenario:
 
 def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario file (.yaml, .yml, .toml or .json)."""
+    import yaml  # here: the short form of `suvtwin simulate` reads no file
+
     path = Path(path)
     if not path.is_file():
         raise InputError(f"scenario file {str(path)!r} does not exist")

@@ -20,13 +20,12 @@ from __future__ import annotations
 import json
 import time
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
-import pandas as pd
-import pyarrow as pa
-import pyarrow.parquet as pq
 
 from suvtwin.errors import InputError, RunError
 from suvtwin.files import atomic_write, package_versions, read_parquet_table
@@ -35,9 +34,16 @@ from suvtwin.mjcf.kernel import (
     CORNER_FIELDS,
     GLOBAL_FIELDS,
     LOG_COLUMNS,
+    M_CENTRE_X,
+    M_CENTRE_Y,
+    M_DIRECTION,
+    M_KIND,
+    M_LANE_Y,
+    M_RADIUS,
     MODE_CIRCLE,
     MODE_LANE,
     MODE_OPEN_LOOP,
+    N_MODE,
     N_STATE,
     finish_log,
     pack_ids,
@@ -49,6 +55,9 @@ from suvtwin.mjcf.tire import effective_rolling_radius, vertical_stiffness
 from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
 from suvtwin.pipeline.scenario import END_MARGIN_M, START_MARGIN_M, Scenario
 from suvtwin.roads.profile import Road, generate_road
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = ["OUTPUT_COLUMNS", "SimResult", "SimulationError", "prepare", "read_run", "simulate", "write_run"]
 
@@ -74,11 +83,28 @@ OUTPUT_COLUMNS = _output_columns()
 
 @dataclass(frozen=True)
 class SimResult:
-    """A finished run: its table (one row per output sample) and its metadata."""
+    """A finished run: its output columns (:data:`OUTPUT_COLUMNS`, one value per output sample),
+    its scenario and its metadata; :attr:`table` holds the same columns as a DataFrame."""
 
-    table: pd.DataFrame
+    columns: dict[str, np.ndarray]
     scenario: Scenario
     metadata: dict
+
+    @property
+    def n_samples(self) -> int:
+        """Number of output samples (rows of :attr:`table`)."""
+        return len(self.columns[OUTPUT_COLUMNS[0]])
+
+    @cached_property
+    def table(self) -> pd.DataFrame:
+        """The run as a pandas DataFrame, one row per output sample, columns :data:`OUTPUT_COLUMNS`.
+
+        Built on first use: writing a run needs no pandas (a 10 s ``suvtwin simulate`` is
+        faster without importing it).
+        """
+        import pandas as pd
+
+        return pd.DataFrame(self.columns)
 
 
 @dataclass
@@ -128,17 +154,18 @@ def prepare(scenario: Scenario) -> _Prepared:
     pressure = np.ascontiguousarray(scenario.pressure_schedule(t))
     speed_ref = np.ascontiguousarray(scenario.speed_profile(t))
     steer_cmd = np.ascontiguousarray(scenario.steer_series(t))
-    mode = np.zeros(6)
+    mode = np.zeros(N_MODE)
     x0 = START_MARGIN_M + vehicle.chassis.a2
     y0 = scenario.steering.lane_y_m
     if scenario.steering.mode == "lane":
-        mode[:2] = MODE_LANE, y0
+        mode[M_KIND], mode[M_LANE_Y] = MODE_LANE, y0
     elif scenario.steering.mode == "circle":
         sign = 1.0 if scenario.steering.direction == "left" else -1.0
         x0 = 0.0
-        mode[:5] = MODE_CIRCLE, x0, y0 + sign * scenario.steering.radius_m, scenario.steering.radius_m, sign
+        mode[M_KIND], mode[M_DIRECTION], mode[M_RADIUS] = MODE_CIRCLE, sign, scenario.steering.radius_m
+        mode[M_CENTRE_X], mode[M_CENTRE_Y] = x0, y0 + sign * scenario.steering.radius_m
     else:
-        mode[0] = MODE_OPEN_LOOP
+        mode[M_KIND] = MODE_OPEN_LOOP
     hdata = model.hfield_data.reshape(int(vm.hfield[4]), int(vm.hfield[5]))
     # initial pose: level, at the static height over the mean road under the wheels
     corner = vehicle.corner_xy
@@ -223,7 +250,7 @@ def simulate(scenario: Scenario, *, progress: bool = False) -> SimResult:
     wall = time.perf_counter() - started
     if bar is not None:
         bar.close()
-    table = _output_table(log[:: scenario.decimation], scenario)
+    columns = _output_arrays(log[:: scenario.decimation], scenario)
     meta = {
         "scenario": scenario.model_dump(mode="json"),
         "road_seed": scenario.road_seed(),
@@ -233,11 +260,11 @@ def simulate(scenario: Scenario, *, progress: bool = False) -> SimResult:
         "wall_time_s": wall,
         "total_mass_kg": float(np.sum(model.body_mass)),
     }
-    return SimResult(table=table, scenario=scenario, metadata=meta)
+    return SimResult(columns=columns, scenario=scenario, metadata=meta)
 
 
-def _output_table(log: np.ndarray, scenario: Scenario) -> pd.DataFrame:
-    raw = dict(zip(LOG_COLUMNS, log.T, strict=True))
+def _output_arrays(log: np.ndarray, scenario: Scenario) -> dict[str, np.ndarray]:
+    raw = dict(zip(LOG_COLUMNS, np.ascontiguousarray(log.T), strict=True))
     rng = np.random.default_rng(scenario.noise_seed())
     out = {}
     for name in GLOBAL_FIELDS:
@@ -253,7 +280,7 @@ def _output_table(log: np.ndarray, scenario: Scenario) -> pd.DataFrame:
                 out[f"{c}_pressure_kpa"] = raw[f"{c}_pressure_pa"] / 1e3
             else:
                 out[f"{c}_{field}"] = raw[f"{c}_{field}"]
-    return pd.DataFrame({name: out[name] for name in OUTPUT_COLUMNS})
+    return {name: out[name] for name in OUTPUT_COLUMNS}
 
 
 def write_run(result: SimResult, path: str | Path) -> None:
@@ -262,10 +289,30 @@ def write_run(result: SimResult, path: str | Path) -> None:
     Atomic (no partial file on failure). The wall time is not stored, so the same
     scenario and seed give the same bytes.
     """
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
     meta = {k: v for k, v in result.metadata.items() if k != "wall_time_s"}
-    table = pa.Table.from_pandas(result.table, preserve_index=False)
+    arrays = [_arrow_float64(result.columns[name]) for name in OUTPUT_COLUMNS]
+    table = pa.Table.from_arrays(arrays, names=list(OUTPUT_COLUMNS))
     table = table.replace_schema_metadata({_METADATA_KEY: json.dumps(meta, sort_keys=True).encode()})
     atomic_write(path, lambda tmp: pq.write_table(table, tmp, compression="zstd"))
+
+
+def _arrow_float64(values: np.ndarray):
+    """`values` as a float64 Arrow array, NaN as null (as pyarrow's pandas conversion stores it).
+
+    Built from its buffers: ``pyarrow.array`` imports pandas on its first call, and writing
+    a run needs no pandas.
+    """
+    import pyarrow as pa
+
+    values = np.ascontiguousarray(values, dtype=np.float64)
+    nan = np.isnan(values)
+    validity = pa.py_buffer(np.packbits(~nan, bitorder="little")) if nan.any() else None
+    return pa.Array.from_buffers(
+        pa.float64(), values.size, [validity, pa.py_buffer(values)], null_count=int(nan.sum())
+    )
 
 
 def read_run(path: str | Path) -> tuple[pd.DataFrame, dict]:

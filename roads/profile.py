@@ -53,10 +53,6 @@ from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
-import pyarrow as pa
-import pyarrow.parquet as pq
-import scipy.fft
-import scipy.signal
 
 from suvtwin.errors import InputError
 from suvtwin.files import atomic_write, package_versions, read_parquet_table
@@ -67,6 +63,7 @@ __all__ = [
     "SHAPE_FILTER_ALPHA",
     "Road",
     "add_obstacles",
+    "fast_fft_length",
     "generate_road",
     "obstacle_profile",
     "read_road",
@@ -139,7 +136,31 @@ def shape_filter_profile(
     noise = rng.standard_normal((n_tracks, n_samples))
     drive = noise * np.sqrt(variance * (1.0 - phi**2))
     drive[:, 0] = noise[:, 0] * np.sqrt(variance)  # stationary start z_0 ~ N(0, σ_z²)
+    import scipy.signal  # here: slow to import (scipy.stats, …) and only this generator needs it
+
     return scipy.signal.lfilter([1.0], [1.0, -phi], drive, axis=-1)
+
+
+def fast_fft_length(n: int) -> int:
+    """Smallest 2^a·3^b·5^c ≥ `n`: a length that pocketfft (numpy.fft, scipy.fft) transforms fast.
+
+    The same number as ``scipy.fft.next_fast_len(n, real=True)``, without importing scipy.fft
+    (slow to import; the road generator needs nothing else from it).
+    """
+    if n < 1:
+        raise ValueError(f"n must be ≥ 1, got {n}")
+    best = 1 << (n - 1).bit_length()  # the smallest power of two ≥ n
+    p5 = 1
+    while p5 < best:
+        p35 = p5
+        while p35 < best:
+            p = p35
+            while p < n:
+                p *= 2
+            best = min(best, p)
+            p35 *= 3
+        p5 *= 5
+    return best
 
 
 def superposition_profile(
@@ -183,7 +204,7 @@ def superposition_profile(
     numpy.ndarray, shape (n_tracks, n_samples)
         Elevation, m.
     """
-    n_fft = scipy.fft.next_fast_len(max(n_samples, int(np.ceil(8.0 / (n_min * spacing_m)))), real=True)
+    n_fft = fast_fft_length(max(n_samples, int(np.ceil(8.0 / (n_min * spacing_m)))))
     dn = 1.0 / (n_fft * spacing_m)
     k = np.arange(n_fft // 2 + 1)
     lines = k * dn
@@ -197,7 +218,7 @@ def superposition_profile(
     # irfft(X)[j] = (2/N) Re sum_k X_k exp(i 2π k j / N); X_k = (N/2) A_k exp(-i(ψ_k + π/2))
     # gives A_k sin(2π n_k x_j - ψ_k).
     spectrum = (n_fft / 2.0) * amplitude * np.exp(-1j * (phase + np.pi / 2.0))
-    return scipy.fft.irfft(spectrum, n=n_fft, axis=-1)[:, :n_samples]
+    return np.fft.irfft(spectrum, n=n_fft, axis=-1)[:, :n_samples]
 
 
 def _psd_integral(lower: np.ndarray, upper: np.ndarray, *, gd_n0: float, waviness: float) -> np.ndarray:
@@ -363,6 +384,9 @@ def write_road(road: Road, path: str | os.PathLike) -> None:
     ``suvtwin.road`` (JSON). The file is written to a temporary name and renamed,
     so a failure never leaves a partial file; the same road gives the same bytes.
     """
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
     table = pa.table({"x_m": road.x, "z_left_m": road.z[0], "z_right_m": road.z[1]})
     info = {
         "spec": None if road.spec is None else road.spec.model_dump(mode="json"),
@@ -384,6 +408,8 @@ def read_road(path: str | os.PathLike) -> Road:
     InputError
         If the file is missing, not Parquet, lacks a column, or holds bad values.
     """
+    import pyarrow as pa
+
     path = Path(path)
     table = read_parquet_table(path, what="road file")
     missing = [c for c in _COLUMNS if c not in table.column_names]

@@ -19,6 +19,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from suvtwin.errors import InputError
 from suvtwin.roads.iso8608 import CLASSES, class_bounds, class_level, class_of_level
+from suvtwin.roads.limits import MAX_SPACING_M, MIN_RECOMMENDED_LENGTH_M
 
 __all__ = [
     "MAX_SPACING_M",
@@ -29,13 +30,6 @@ __all__ = [
     "format_validation_error",
     "parse_road_spec",
 ]
-
-MAX_SPACING_M = 0.05
-"""Coarsest grid spacing, m: its Nyquist frequency 1/(2·0.05) = 10 cycles/m is the
-upper end of the generated band (Brancati & Tufano 2022, §2: Δ ≤ 1/(2·Ω_U))."""
-
-MIN_RECOMMENDED_LENGTH_M = 100.0
-"""Shortest road that holds one wavelength of the 0.01 cycle/m lower band edge, m."""
 
 _MODEL = ConfigDict(frozen=True, extra="forbid", str_strip_whitespace=True)
 

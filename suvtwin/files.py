@@ -9,11 +9,12 @@ import os
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
-
-import pyarrow as pa
-import pyarrow.parquet as pq
+from typing import TYPE_CHECKING
 
 from suvtwin.errors import InputError
+
+if TYPE_CHECKING:
+    import pyarrow as pa
 
 __all__ = ["atomic_write", "package_versions", "read_parquet_table", "save_figure"]
 
@@ -46,6 +47,9 @@ def _umask() -> int:
 
 def read_parquet_table(path: str | os.PathLike, *, what: str) -> pa.Table:
     """Read a Parquet file, or raise InputError naming `what` (e.g. "road file") and the problem."""
+    import pyarrow as pa  # here: suvtwin.files is imported by commands that never touch Parquet
+    import pyarrow.parquet as pq
+
     path = Path(path)
     if not path.is_file():
         raise InputError(f"{what} {str(path)!r} does not exist")
