@@ -32,6 +32,10 @@ from __future__ import annotations
 
 import numba
 
+# numba's on-disk cache of a caller (the IMM-UKF loop, the identification loop) is keyed on the
+# caller's own file: after editing this module, delete the callers' cached machine code
+# (``__pycache__/*.nbi``, ``*.nbc`` of estimators/ and identification/) or they keep the old law.
+
 __all__ = ["accelerations", "sprung_acceleration", "suspension_force", "unsprung_acceleration"]
 
 

@@ -40,6 +40,10 @@ import numba
 from suvtwin.errors import InputError
 from suvtwin.tir import read_tir
 
+# numba's on-disk cache of a caller (mjcf/kernel.py's step kernel, mjcf/tire.py) is keyed on the
+# caller's own file: after editing the two scalar laws, delete the callers' cached machine code
+# (``__pycache__/*.nbi``, ``*.nbc``) or they keep the old law.
+
 __all__ = [
     "TireStiffness",
     "pressure_at_stiffness",
