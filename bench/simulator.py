@@ -27,7 +27,7 @@ import numpy as np
 from mujoco import rollout
 
 from suvtwin.mjcf.builder import flat_road_xml
-from suvtwin.mjcf.tire import TireParams
+from suvtwin.mjcf.tire import load_tire
 from suvtwin.mjcf.vehicle import load_vehicle
 from suvtwin.pipeline.scenario import parse_scenario
 from suvtwin.pipeline.simulator import simulate
@@ -49,7 +49,8 @@ def _scenario(timestep: float) -> object:
 def _baseline_model() -> mujoco.MjModel:
     """The SUV multibody (native-contact variant) on a plane, MuJoCo's own sphere contact with
     friction, and linear joint springs/dampers in place of the kernel's suspension and tyre laws."""
-    vehicle, tire = load_vehicle(), TireParams()
+    vehicle = load_vehicle()
+    tire = load_tire(vehicle.tire_file)
     xml = flat_road_xml(vehicle, tire, contact="native")
     start = xml.index('<geom name="road"')
     end = xml.index("/>", start) + 2

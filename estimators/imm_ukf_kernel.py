@@ -13,7 +13,8 @@ numpy reference path of :func:`~estimators.tire_pressure.estimate_pressure`, bui
 unscented transform), in the same order of operations — Brancati & Tufano 2022:
 
 - eq. 9–11: IMM mixing, standard form (with the spread-of-means term);
-- eq. 15 / semi-implicit Euler: quarter-car process model (eq. 1) on each sigma point,
+- eq. 15 / semi-implicit Euler: quarter-car process model (eq. 1,
+  :func:`suvtwin.quarter_car_law.accelerations`) on each sigma point,
   road at mid-step (synthetic or true road), or the augmented 6th road state with AR(1)
   dynamics :math:`z_{r,k+1} = \phi z_{r,k}`;
 - eq. 16: measurement = sprung and unsprung accelerations (m/s²);
@@ -45,10 +46,11 @@ cached machine code); all matrices are 5×5 or 6×6, so explicit loops beat BLAS
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 
 from suvtwin.estimators.ukf import SigmaWeights
+from suvtwin.jit import cached_njit
+from suvtwin.quarter_car_law import accelerations
 
 __all__ = ["robust_cholesky_batch", "run_imm_ukf"]
 
@@ -56,7 +58,7 @@ _TINY = np.finfo(float).tiny
 _LOG_2PI = np.log(2.0 * np.pi)
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _cholesky(a, L):
     """Lower Cholesky factor of `a` (reading its lower triangle, as LAPACK's ``potrf('L')``)
     into `L`; False, as LAPACK's failure, when a pivot is not positive (or NaN)."""
@@ -79,7 +81,7 @@ def _cholesky(a, L):
     return True
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _robust_cholesky(a, L, work):
     """Lower Cholesky factor of `a` into `L`, repairing `a` if it is not positive definite
     (same ladder as :func:`suvtwin.estimators.ukf.robust_cholesky`). Returns whether it repaired."""
@@ -116,7 +118,7 @@ def _robust_cholesky(a, L, work):
     return True
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _robust_cholesky_batch(a, out, repaired):
     for b in range(a.shape[0]):
         work = np.empty(a.shape[1:])
@@ -134,7 +136,7 @@ def robust_cholesky_batch(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return out.reshape(a.shape), repaired.reshape(a.shape[:-2])
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _sigma_points(x, P, c, sig, A, L, work):
     """Scaled sigma points x, x ± columns of chol(c·P) into `sig` (2n+1, n); returns repaired."""
     n = x.shape[0]
@@ -151,17 +153,7 @@ def _sigma_points(x, P, c, sig, A, L, work):
     return repaired
 
 
-@numba.njit(cache=True)
-def _accelerations(zs, zus, vs, vus, kt, zr, ks, ksnl, cs, csnl, ms, mus, signed):
-    """Eq. 1 (paper 000), as :func:`suvtwin.estimators.quarter_car.accelerations`: m/s²."""
-    d = zs - zus
-    v = vs - vus
-    g = abs(v) if signed else v
-    force = (ks + ksnl * (d * d)) * d + (cs + csnl * g) * v
-    return -force / ms, (force - kt * (zus - zr)) / mus
-
-
-@numba.njit(cache=True)
+@cached_njit
 def _run(
     acc_s, acc_u, dt, road, phi, Q, R, x0, P0, mu0, transition, ks, ksnl, cs, csnl, ms, mus,
     wm, wc, lam, mu_floor, augmented, semi_implicit, signed, kt_hat, kt_sig, mode_prob, mode_kt, repairs,
@@ -243,7 +235,7 @@ def _run(
                         zr_mid = 0.5 * (road[b, sr, k - 1] + road[b, sr, k])
                     for j in range(n_sig):
                         zr = sig[j, 5] if augmented else zr_mid
-                        a_s, a_u = _accelerations(
+                        a_s, a_u = accelerations(
                             sig[j, 0], sig[j, 1], sig[j, 2], sig[j, 3], sig[j, 4], zr,
                             ks[s], ksnl[s], cs[s], csnl[s], ms, mus, signed,
                         )  # fmt: skip
@@ -279,7 +271,7 @@ def _run(
                     # --- update (eq. 16): accelerations of the prior sigma points
                     for j in range(n_sig):
                         zr = sig[j, 5] if augmented else road[b, sr, k]
-                        a_s, a_u = _accelerations(
+                        a_s, a_u = accelerations(
                             sig[j, 0], sig[j, 1], sig[j, 2], sig[j, 3], sig[j, 4], zr,
                             ks[s], ksnl[s], cs[s], csnl[s], ms, mus, signed,
                         )  # fmt: skip

@@ -71,7 +71,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
-import numba
 import numpy as np
 import numpy.typing as npt
 import scipy.signal
@@ -82,6 +81,7 @@ from suvtwin.estimators.quarter_car import (
     pressure_sigma_from_stiffness_sigma,
     stiffness_from_pressure,
 )
+from suvtwin.jit import cached_njit
 
 __all__ = [
     "JointEstimate",
@@ -345,7 +345,7 @@ def profile_loglik_slope(
     return loglik, lam, beta, (i_ll, i_lb, i_bb)
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _profile_slope_kernel(power, log_gain, weight, log_n, lo, hi, b_lo, b_hi, lam, beta, iterations):
     """Fisher scoring of :func:`profile_loglik_slope`, each (run, stiffness) to its own convergence."""
     n_runs, n_points = lam.shape

@@ -21,6 +21,11 @@ Brancati & Tufano 2022:
   *standard deviations* on the diagonal; a covariance needs the variances, which is
   what :func:`measurement_noise` returns (the paper's form is ``literal=True``).
 
+Eq. 1 and eq. 3–4 are evaluated by the compiled scalar functions of
+:mod:`suvtwin.quarter_car_law` and :mod:`suvtwin.tire_stiffness` (the same ones the
+compiled IMM-UKF, the identification and the simulator call), here through ufuncs
+over arrays; the tyre constants default to the SUV's ``.tir`` file.
+
 No MuJoCo here: estimators consume arrays.
 """
 
@@ -29,8 +34,16 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
+import numba
 import numpy as np
 import numpy.typing as npt
+
+from suvtwin.quarter_car_law import sprung_acceleration, suspension_force, unsprung_acceleration
+from suvtwin.tire_stiffness import (
+    pressure_at_stiffness_array,
+    stiffness_at_pressure_array,
+    suv_tire_stiffness,
+)
 
 __all__ = [
     "IX_KT",
@@ -52,10 +65,6 @@ __all__ = [
 ]
 
 IX_ZS, IX_ZUS, IX_VS, IX_VUS, IX_KT = 0, 1, 2, 3, 4
-
-KT0 = 264700.0  # N/m, paper 000 Table 1
-P0 = 250e3  # Pa, paper 000 Table 1
-PFZ1 = 0.7097  # MF-Tyre 6.1 PFZ1 (paper 000 eq. 3)
 
 
 @dataclass(frozen=True)
@@ -92,27 +101,53 @@ def sprung_mass_share(
     return 0.5 * (chassis_mass + load) * a_opposite / wheelbase
 
 
-def stiffness_from_pressure(pressure: npt.ArrayLike, *, kt0: float = KT0, p0: float = P0, pfz1: float = PFZ1):
-    """Tire vertical stiffness at inflation pressure `pressure` (Pa), N/m (paper 000 eq. 3–4)."""
-    return kt0 * (1.0 + pfz1 * (np.asarray(pressure, dtype=float) - p0) / p0)
+def _law(kt0: float | None, p0: float | None, pfz1: float | None) -> tuple[float, float, float]:
+    """(kt0, p0, pfz1) of eq. 3–4: the SUV tyre's (its .tir file), with any given one replacing its own."""
+    suv = suv_tire_stiffness()
+    return (suv.kt0 if kt0 is None else kt0, suv.p0 if p0 is None else p0, suv.pfz1 if pfz1 is None else pfz1)
 
 
-def pressure_from_stiffness(kt: npt.ArrayLike, *, kt0: float = KT0, p0: float = P0, pfz1: float = PFZ1):
-    """Inflation pressure for tire stiffness `kt` (N/m), Pa (inverse of eq. 3–4)."""
-    return p0 * (1.0 + (np.asarray(kt, dtype=float) / kt0 - 1.0) / pfz1)
+def stiffness_from_pressure(
+    pressure: npt.ArrayLike, *, kt0: float | None = None, p0: float | None = None, pfz1: float | None = None
+):
+    """Tire vertical stiffness at inflation pressure `pressure` (Pa), N/m (paper 000 eq. 3–4).
+
+    `kt0` (N/m), `p0` (Pa), `pfz1` (−) default to the SUV's tyre
+    (:func:`suvtwin.tire_stiffness.suv_tire_stiffness`, the simulator's .tir file).
+    """
+    return stiffness_at_pressure_array(np.asarray(pressure, dtype=float), *_law(kt0, p0, pfz1))
+
+
+def pressure_from_stiffness(
+    kt: npt.ArrayLike, *, kt0: float | None = None, p0: float | None = None, pfz1: float | None = None
+):
+    """Inflation pressure for tire stiffness `kt` (N/m), Pa (inverse of eq. 3–4; defaults as
+    :func:`stiffness_from_pressure`)."""
+    return pressure_at_stiffness_array(np.asarray(kt, dtype=float), *_law(kt0, p0, pfz1))
 
 
 def pressure_sigma_from_stiffness_sigma(
-    sigma_kt: npt.ArrayLike, *, kt0: float = KT0, p0: float = P0, pfz1: float = PFZ1
+    sigma_kt: npt.ArrayLike, *, kt0: float | None = None, p0: float | None = None, pfz1: float | None = None
 ):
     """Standard deviation of the pressure (Pa) for a k_t standard deviation (N/m): eq. 3–4 is linear."""
+    kt0, p0, pfz1 = _law(kt0, p0, pfz1)
     return np.asarray(sigma_kt, dtype=float) * p0 / (kt0 * pfz1)
 
 
-def _suspension_force(d, v, qc: QuarterCar):
-    return (qc.spring_rate + qc.spring_cubic * (d * d)) * d + (
-        qc.damping + qc.damping_nonlinear * (np.abs(v) if qc.damper_law == "signed" else v)
-    ) * v
+# eq. 1 over broadcast arrays: ufuncs wrapping the compiled scalar law (compiled on first use)
+@numba.vectorize(cache=False)  # no on-disk cache: it would not see edits to suvtwin.quarter_car_law
+def _suspension_force(z_s, z_us, v_s, v_us, ks, ksnl, cs, csnl, signed):
+    return suspension_force(z_s, z_us, v_s, v_us, ks, ksnl, cs, csnl, signed)
+
+
+@numba.vectorize(cache=False)  # no on-disk cache: it would not see edits to suvtwin.quarter_car_law
+def _sprung_acceleration(force, m_s):
+    return sprung_acceleration(force, m_s)
+
+
+@numba.vectorize(cache=False)  # no on-disk cache: it would not see edits to suvtwin.quarter_car_law
+def _unsprung_acceleration(force, kt, z_us, z_r, m_us):
+    return unsprung_acceleration(force, kt, z_us, z_r, m_us)
 
 
 def accelerations(x: np.ndarray, z_road: npt.ArrayLike, qc: QuarterCar) -> tuple[np.ndarray, np.ndarray]:
@@ -127,11 +162,12 @@ def accelerations(x: np.ndarray, z_road: npt.ArrayLike, qc: QuarterCar) -> tuple
     qc : QuarterCar
         Parameters broadcast against ``x[..., 0]``.
     """
-    d = x[..., IX_ZS] - x[..., IX_ZUS]
-    v = x[..., IX_VS] - x[..., IX_VUS]
-    force = _suspension_force(d, v, qc)
-    acc_s = -force / qc.sprung_mass
-    acc_us = (force - x[..., IX_KT] * (x[..., IX_ZUS] - z_road)) / qc.unsprung_mass
+    force = _suspension_force(
+        x[..., IX_ZS], x[..., IX_ZUS], x[..., IX_VS], x[..., IX_VUS],
+        qc.spring_rate, qc.spring_cubic, qc.damping, qc.damping_nonlinear, qc.damper_law == "signed",
+    )  # fmt: skip
+    acc_s = _sprung_acceleration(force, qc.sprung_mass)
+    acc_us = _unsprung_acceleration(force, x[..., IX_KT], x[..., IX_ZUS], z_road, qc.unsprung_mass)
     return acc_s, acc_us
 
 

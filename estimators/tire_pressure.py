@@ -52,9 +52,6 @@ from suvtwin.estimators.imm import PAPER_TRANSITION, imm_mix, imm_probabilities
 from suvtwin.estimators.imm_ukf_kernel import run_imm_ukf
 from suvtwin.estimators.quarter_car import (
     IX_KT,
-    KT0,
-    P0,
-    PFZ1,
     QuarterCar,
     accelerations,
     measurement_noise,
@@ -68,6 +65,7 @@ from suvtwin.estimators.quarter_car import (
 from suvtwin.estimators.ukf import merwe_weights, ukf_predict, ukf_update
 from suvtwin.roads.iso8608 import class_level
 from suvtwin.roads.profile import SHAPE_FILTER_ALPHA, shape_filter_intensity, shape_filter_profile
+from suvtwin.tire_stiffness import suv_tire_stiffness
 
 __all__ = [
     "PAPER_TABLE_3",
@@ -332,7 +330,8 @@ def estimate_pressure(
     w = merwe_weights(n, alpha=settings.alpha, beta=settings.beta, kappa=settings.kappa)
 
     kt0 = stiffness_from_pressure(settings.pressure_guess_kpa * 1e3)
-    kt_sigma0 = KT0 * PFZ1 * settings.pressure_sigma_kpa * 1e3 / P0
+    tire = suv_tire_stiffness()
+    kt_sigma0 = tire.kt0 * tire.pfz1 * settings.pressure_sigma_kpa * 1e3 / tire.p0
     x = np.zeros((n_runs, n_modes, n))
     x[..., IX_KT] = kt0 if initial_stiffness is None else np.asarray(initial_stiffness, dtype=float)[:, None]
     if road_input == "true":  # start on the known road

@@ -14,10 +14,11 @@ mass, and the tire stiffness :math:`k_t(p)` of each scenario (eq. 3–4). Object
 (eq. 20–21): the RMSE of the sprung and of the unsprung acceleration in each
 scenario — 18 for the paper's nine (3 speeds × 3 pressures).
 
-The quarter car is driven by the known road under the tire and simulated with the
-discretization the estimator uses (:func:`suvtwin.estimators.quarter_car.process_semi_implicit`,
-road at mid-step), for a whole population × all scenarios in one compiled loop:
-this is the hot loop of the GA, so it is compiled with numba like the other per-step loops.
+The quarter car (eq. 1, :mod:`suvtwin.quarter_car_law`) is driven by the known road under
+the tire and simulated with the discretization the estimator uses
+(:func:`suvtwin.estimators.quarter_car.process_semi_implicit`, road at mid-step), for a
+whole population × all scenarios in one compiled loop: this is the hot loop of the GA,
+so it is compiled with numba like the other per-step loops.
 
 The algorithm is pymoo's NSGA-III with Das–Dennis-free "energy" reference
 directions (suited to 18 objectives); problem, algorithm and termination are kept
@@ -33,7 +34,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import numba
 import numpy as np
 from pymoo.algorithms.moo.nsga3 import NSGA3
 from pymoo.core.problem import Problem
@@ -42,6 +42,8 @@ from pymoo.util.nds.non_dominated_sorting import NonDominatedSorting
 from pymoo.util.ref_dirs import get_reference_directions
 
 from suvtwin.errors import InputError
+from suvtwin.jit import cached_njit
+from suvtwin.quarter_car_law import sprung_acceleration, suspension_force, unsprung_acceleration
 
 __all__ = [
     "DEFAULT_BOUNDS",
@@ -102,7 +104,7 @@ class FitData:
                 raise InputError(f"fit data: {name} holds NaN or infinite values")
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _simulate_scenario(cs, csnl, ks, ksnl, road, k_t, ms, mus, dt, signed, acc_s, acc_u):
     """Accelerations of one QC on one road (writes acc_s, acc_u of shape (T,)), m/s²."""
     zs = road[0]
@@ -111,21 +113,18 @@ def _simulate_scenario(cs, csnl, ks, ksnl, road, k_t, ms, mus, dt, signed, acc_s
     vu = 0.0
     n_t = road.shape[0]
     for k in range(n_t):
-        d = zs - zu
-        v = vs - vu
-        nl = abs(v) * v if signed else v * v
-        force = (ks + ksnl * d * d) * d + cs * v + csnl * nl
-        acc_s[k] = -force / ms
-        acc_u[k] = (force - k_t * (zu - road[k])) / mus
+        force = suspension_force(zs, zu, vs, vu, ks, ksnl, cs, csnl, signed)  # eq. 1
+        acc_s[k] = sprung_acceleration(force, ms)
+        acc_u[k] = unsprung_acceleration(force, k_t, zu, road[k], mus)
         if k + 1 < n_t:  # semi-implicit Euler, road at mid-step
             mid = 0.5 * (road[k] + road[k + 1])
             vs += acc_s[k] * dt
-            vu += (force - k_t * (zu - mid)) / mus * dt
+            vu += unsprung_acceleration(force, k_t, zu, mid, mus) * dt
             zs += vs * dt
             zu += vu * dt
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _rmse_population(params, road, acc_s, acc_u, kt, ms, mus, dt, signed):
     """RMSE of sprung and unsprung acceleration, shape (P, 2S): columns s (sprung) and S + s."""
     n_pop, n_sc, n_t = params.shape[0], road.shape[0], road.shape[1]

@@ -46,7 +46,7 @@ import mujoco
 import numpy as np
 
 from suvtwin.errors import InputError
-from suvtwin.mjcf.tire import TireParams
+from suvtwin.mjcf.tire import TireParams, load_tire
 from suvtwin.mjcf.vehicle import CORNERS, GRAVITY, VehicleParams
 from suvtwin.roads.profile import Road
 
@@ -294,7 +294,8 @@ def build_model(
     road : Road
         Two-track road; its x grid (≤ 0.05 m) becomes the heightfield columns.
     tire : TireParams, optional
-        MF-Tyre and vertical tire parameters (default :class:`suvtwin.mjcf.tire.TireParams`).
+        MF-Tyre and vertical tire parameters (default: the ``.tir`` file the vehicle's
+        parameter file names, :attr:`~suvtwin.mjcf.vehicle.VehicleParams.tire_file`).
     contact : {"envelope", "native"}
         Tire-road contact: the tire model reading the heightfield (default) or
         MuJoCo's sphere-heightfield contact.
@@ -311,7 +312,7 @@ def build_model(
     flat = not np.any(road.z)
     if road.spacing_m > 0.05 + 1e-12 and not flat:
         raise InputError(f"road spacing must be ≤ 0.05 m for the heightfield, got {road.spacing_m:g}")
-    tire = tire or TireParams()
+    tire = tire or load_tire(vehicle.tire_file)
     track_y = 0.25 * (vehicle.chassis.track_front + vehicle.chassis.track_rear)
     y, grid = road_grid(road, track_y=track_y, half_width=half_width, n_rows=3 if flat else None)
     z_min, z_max = float(grid.min()), float(grid.max())
@@ -401,9 +402,10 @@ def flat_road_xml(
     """MJCF of the SUV on a flat 200 m road (``contact="envelope"``: ``mjcf/suv/suv.xml``)."""
     from suvtwin.mjcf.vehicle import load_vehicle
 
+    vehicle = vehicle or load_vehicle()
     return vehicle_xml(
-        vehicle or load_vehicle(),
-        tire or TireParams(),
+        vehicle,
+        tire or load_tire(vehicle.tire_file),
         hfield_shape=(3, 3),
         hfield_size=(100.0, 5.0, 0.001, 0.5),
         hfield_pos=(80.0, 0.0, 0.0),

@@ -1,14 +1,15 @@
 r"""Tire model of the SUV: radial stiffness vs pressure, vertical force, MF-Tyre 6.1 forces.
 
 Usual call (inside the step kernel): ``fx, fy = tire_forces(fz, kappa, alpha, pressure, tp)``
-with ``tp = TireParams().to_array()``.
+with ``tp = load_tire().to_array()``.
 
 Units are SI throughout: N, m, m/s, Pa, N/m, N s/m, rad; slip ratio and the MF
 coefficients are dimensionless.
 
 - Vertical: :math:`F_z = k_t(p)\,\delta + c_t\,\dot\delta` for :math:`\delta > 0`, never
   negative, zero when lifted off, with :math:`k_t = k_{t0}(1 + p_{Fz1}\,dp_i)`,
-  :math:`dp_i = (p - p_0)/p_0` ([3]_ eq. 3–4; MF-Tyre 6.1 PFZ1 [2]_).
+  :math:`dp_i = (p - p_0)/p_0` ([3]_ eq. 3–4; MF-Tyre 6.1 PFZ1 [2]_), evaluated by
+  :mod:`suvtwin.tire_stiffness` (the estimators use the same function).
 - Longitudinal and lateral: MF-Tyre 6.1 pure slip with the inflation-pressure terms
   PPX1–4 (slip stiffness, friction) and PPY1–4 (cornering stiffness, the load of its
   peak, friction), combined slip by the cosine weighting functions
@@ -30,24 +31,14 @@ contact point's lateral velocity in the wheel frame (left positive), gives
 with either sign gives this convention. As in MF 6.1 (eq. 4.E3) the lateral slip
 entering the formulas is :math:`\alpha^* = \tan\alpha = V_y/|V_x|`.
 
-Coefficients (defaults of :class:`TireParams`):
-
-- Shape, load and combined-slip coefficients, BREFF/DREFF/FREFF: the MF-Tyre 6.1
-  example car tyre 205/60R15 (R0 0.3135 m, FNOMIN 4000 N, [1]_ Appendix 3), read from
-  the .tir file ``examples/sample.tir`` of github.com/henrytad/tire_model (commit
-  86728279fe12; that file's NOMPRES was edited to 200 kPa, its scaling factors are
-  not 1 and are not used here). The same values appear in other public transcriptions of the
-  book's table, except PCY1, given there as 1.338 (1.337 in the .tir).
-- Pressure terms: the TNO MF-Tyre 6.1 example tyre at NOMPRES 220 kPa as quoted by the
-  suvtwin developers (not checked against a published file): PFZ1 0.7097; PPX1–4 −0.3489,
-  0.382, −0.0963, 0.0645; PPY1–4 −0.6249, −0.0654, −0.1668, 0.2834. The .tir above rounds
-  them differently (PFZ1 0.7098; PPX −0.3485, 0.37824, −0.09603, 0.06518; PPY −0.6255,
-  −0.06523, −0.16666, −0.2811): its PPY4 has the opposite sign. The quoted values are used.
-- Kept dimensionless: the MF shape is that of the 205/60R15 tyre, but the
-  operating point is moved to the SUV (235/60R18): :math:`p_0` = 250 kPa (paper 000),
-  :math:`F_{z0}` = 5000 N (an SUV corner's static load), :math:`R_0` = 0.37 m,
-  :math:`k_{t0}` = 264.7 kN/m (paper 000, Table 1), so :math:`dp_i` and
-  :math:`df_z` are measured from the SUV's operating point.
+Coefficients: read from a TNO MF-Tyre 6.1 property file (``.tir``) by
+:meth:`TireParams.from_tir`; the SUV's is ``mjcf/suv/suv_235_60R18.tir``, named by
+``mjcf/suv/parameters.toml`` (``[tire.file]``), and its ``$`` comments give every value's
+source: the shape, load and combined-slip coefficients of the MF-Tyre 6.1 example car
+tyre 205/60R15 ([1]_ Appendix 3), the pressure terms of the TNO example ([2]_), and the
+SUV's operating point (p0, FNOMIN, R0, kt0 of [3]_), so that :math:`dp_i` and
+:math:`df_z` are measured from the SUV's nominal pressure and load. A scenario or
+``suvtwin simulate --tire FILE`` may name another ``.tir``.
 
 Written by hand because the step kernel needs scalar functions compiled with numba.
 Searching the PyPI package index for tyre/tire/pacejka/magic-formula names found
@@ -70,7 +61,7 @@ References
 
 Examples
 --------
->>> tp = TireParams().to_array()
+>>> tp = load_tire().to_array()
 >>> round(vertical_stiffness(200e3, tp))  # 20 % under-inflated: kt drops by 14.2 %
 227128
 >>> fx, fy = tire_forces(5000.0, 0.05, 0.0, 250e3, tp)
@@ -80,17 +71,26 @@ True
 
 from __future__ import annotations
 
+from collections import namedtuple
 from dataclasses import asdict, dataclass, fields
+from pathlib import Path
 
-import numba
 import numpy as np
 import numpy.typing as npt
 
 from suvtwin.errors import InputError
+from suvtwin.jit import cached_njit
+from suvtwin.tir import read_tir
+from suvtwin.tire_stiffness import pressure_at_stiffness_array, stiffness_at_pressure, suv_tire_file
 
 __all__ = [
+    "N_PARAMS",
+    "SLOT",
+    "TIR_KEYS",
     "TireParams",
+    "TireSlots",
     "effective_rolling_radius",
+    "load_tire",
     "pressure_from_stiffness",
     "tire_forces",
     "tire_forces_array",
@@ -109,72 +109,95 @@ _ALPHA_MAX = 1.5
 class TireParams:
     """Tyre parameters, SI units (Pa, N, m, N/m, N s/m); MF coefficients dimensionless.
 
-    Field order is the packed order of :meth:`to_array` (index constants ``I_<NAME>``
-    of this module). Sources: see the module docstring.
+    Read from a TNO MF-Tyre 6.1 property file by :meth:`from_tir` (:func:`load_tire` for
+    the SUV's, ``mjcf/suv/suv_235_60R18.tir``, whose comments give each value's source);
+    the ``.tir`` section and key of each field are in :data:`TIR_KEYS`. Field order is
+    the packed order of :meth:`to_array` (slots :data:`SLOT`, index constants ``I_<NAME>``).
     """
 
-    unloaded_radius: float = 0.37  # m, R0 of a 235/60R18 SUV tyre
-    nominal_pressure: float = 250e3  # Pa, p0 of paper 000
-    nominal_load: float = 5000.0  # N, FNOMIN: about an SUV corner's static load
-    vertical_stiffness_nominal: float = 264700.0  # N/m, kt0 of paper 000 Table 1
-    # N s/m: MF-Tyre .tir files give VERTICAL_DAMPING 50-500 N s/m for car tyres (the 205/60R15
-    # file: 50; MFeval's MF 6.1 example: 500); paper 000 neglects tyre damping
-    vertical_damping: float = 200.0
-    pfz1: float = 0.7097  # MF-Tyre 6.1 PFZ1, pressure effect on vertical stiffness
-    lambda_mu: float = 1.0  # friction scaling LMUX = LMUY (1: dry asphalt of the fit)
-    # longitudinal, pure slip (.tir [LONGITUDINAL_COEFFICIENTS])
-    pcx1: float = 1.579
-    pdx1: float = 1.0422
-    pdx2: float = -0.08285
-    pex1: float = 0.11113
-    pex2: float = 0.3143
-    pex3: float = 0.0
-    pex4: float = 0.001719
-    pkx1: float = 21.687
-    pkx2: float = 13.728
-    pkx3: float = -0.4098
-    ppx1: float = -0.3489  # PPX1-4, PPY1-4: the quoted values (module docstring)
-    ppx2: float = 0.382
-    ppx3: float = -0.0963
-    ppx4: float = 0.0645
-    # lateral, pure slip (.tir [LATERAL_COEFFICIENTS])
-    pcy1: float = 1.337
-    pdy1: float = 0.8785
-    pdy2: float = -0.06452
-    pey1: float = -0.8057
-    pey2: float = -0.6046
-    pey3: float = 0.09854
-    pky1: float = -15.324  # ISO-W sign; only |PKY1| is used
-    pky2: float = 1.715
-    pky4: float = 2.0005
-    ppy1: float = -0.6249  # quoted value (module docstring)
-    ppy2: float = -0.0654
-    ppy3: float = -0.1668
-    ppy4: float = 0.2834
-    # combined slip (.tir)
-    rbx1: float = 13.046
-    rbx2: float = 9.718
-    rcx1: float = 0.9995
-    rex1: float = -0.4403
-    rex2: float = -0.4663
-    rby1: float = 10.622
-    rby2: float = 7.82
-    rby3: float = 0.002037
-    rcy1: float = 1.0587
-    rey1: float = 0.3148
-    rey2: float = 0.004867
-    # effective rolling radius (.tir [VERTICAL])
-    breff: float = 8.386
-    dreff: float = 0.25826
-    freff: float = 0.07394
+    unloaded_radius: float  # m, R0
+    nominal_pressure: float  # Pa, p0 (NOMPRES)
+    nominal_load: float  # N, FNOMIN
+    vertical_stiffness_nominal: float  # N/m, kt0 at p0
+    vertical_damping: float  # N s/m
+    pfz1: float  # pressure effect on vertical stiffness
+    lambda_mu: float  # friction scaling LMUX = LMUY
+    # longitudinal, pure slip
+    pcx1: float
+    pdx1: float
+    pdx2: float
+    pex1: float
+    pex2: float
+    pex3: float
+    pex4: float
+    pkx1: float
+    pkx2: float
+    pkx3: float
+    ppx1: float
+    ppx2: float
+    ppx3: float
+    ppx4: float
+    # lateral, pure slip
+    pcy1: float
+    pdy1: float
+    pdy2: float
+    pey1: float
+    pey2: float
+    pey3: float
+    pky1: float  # ISO-W sign; only |PKY1| is used
+    pky2: float
+    pky4: float
+    ppy1: float
+    ppy2: float
+    ppy3: float
+    ppy4: float
+    # combined slip
+    rbx1: float
+    rbx2: float
+    rcx1: float
+    rex1: float
+    rex2: float
+    rby1: float
+    rby2: float
+    rby3: float
+    rcy1: float
+    rey1: float
+    rey2: float
+    # effective rolling radius
+    breff: float
+    dreff: float
+    freff: float
 
     def to_array(self) -> np.ndarray:
-        """Packed parameter vector ``tp``, shape ``(47,)``, float64, in field order."""
+        """Packed parameter vector ``tp``, shape ``(N_PARAMS,)``, float64, in field order."""
         return np.array([getattr(self, f.name) for f in fields(self)], dtype=np.float64)
 
     @classmethod
-    def from_mapping(cls, values: dict) -> TireParams:
-        """Defaults overridden by `values` (field name → number, SI units).
+    def from_tir(cls, path: str | Path) -> TireParams:
+        """Read a TNO MF-Tyre 6.1 property file (``.tir``), converting by its [UNITS] to SI.
+
+        Raises
+        ------
+        InputError
+            If the file is malformed, lacks a key of :data:`TIR_KEYS`, or gives LMUX ≠ LMUY
+            (this model has one friction scaling); the message names the file, line and key.
+        """
+        tir = read_tir(path)
+        values = {
+            name: tir.number(section, key, dimension) for name, (section, key, dimension) in TIR_KEYS.items()
+        }
+        lmuy = tir.number("SCALING_COEFFICIENTS", "LMUY")
+        if lmuy != values["lambda_mu"]:
+            line = tir.sections["SCALING_COEFFICIENTS"]["LMUY"].line
+            raise InputError(
+                f"tyre file {tir.path}, line {line}: [SCALING_COEFFICIENTS] LMUY must equal LMUX "
+                f"({values['lambda_mu']:g}: this model has one friction scaling), got {lmuy:g}"
+            )
+        return cls(**values)
+
+    @classmethod
+    def from_mapping(cls, values: dict, *, base: TireParams | None = None) -> TireParams:
+        """`base` (default: the SUV's tyre, :func:`load_tire`) with `values` replaced (field → number, SI).
 
         Raises
         ------
@@ -187,7 +210,7 @@ class TireParams:
             raise InputError(
                 f"tire: unknown parameter(s) {', '.join(unknown)}; expected some of {', '.join(known)}"
             )
-        merged = asdict(cls())
+        merged = asdict(base if base is not None else load_tire())
         for name, value in values.items():
             try:
                 number = float(value)
@@ -199,27 +222,64 @@ class TireParams:
         return cls(**merged)
 
 
-# positions in TireParams.to_array() (field order); tests/test_tire.py checks them against the fields
-I_UNLOADED_RADIUS, I_NOMINAL_PRESSURE, I_NOMINAL_LOAD = 0, 1, 2
-I_KT0, I_CT, I_PFZ1, I_LAMBDA_MU = 3, 4, 5, 6
-(I_PCX1, I_PDX1, I_PDX2, I_PEX1, I_PEX2, I_PEX3, I_PEX4, I_PKX1, I_PKX2, I_PKX3) = range(7, 17)
-(I_PPX1, I_PPX2, I_PPX3, I_PPX4) = range(17, 21)
-(I_PCY1, I_PDY1, I_PDY2, I_PEY1, I_PEY2, I_PEY3, I_PKY1, I_PKY2, I_PKY4) = range(21, 30)
-(I_PPY1, I_PPY2, I_PPY3, I_PPY4) = range(30, 34)
-(I_RBX1, I_RBX2, I_RCX1, I_REX1, I_REX2) = range(34, 39)
-(I_RBY1, I_RBY2, I_RBY3, I_RCY1, I_REY1, I_REY2) = range(39, 45)
-(I_BREFF, I_DREFF, I_FREFF) = range(45, 48)
-N_PARAMS = 48
+_LONGITUDINAL = ("pcx1", "pdx1", "pdx2", "pex1", "pex2", "pex3", "pex4", "pkx1", "pkx2", "pkx3",
+                 "ppx1", "ppx2", "ppx3", "ppx4", "rbx1", "rbx2", "rcx1", "rex1", "rex2")  # fmt: skip
+_LATERAL = ("pcy1", "pdy1", "pdy2", "pey1", "pey2", "pey3", "pky1", "pky2", "pky4",
+            "ppy1", "ppy2", "ppy3", "ppy4", "rby1", "rby2", "rby3", "rcy1", "rey1", "rey2")  # fmt: skip
+
+TIR_KEYS: dict[str, tuple[str, str, str]] = {
+    "unloaded_radius": ("DIMENSION", "UNLOADED_RADIUS", "length"),
+    "nominal_pressure": ("OPERATING_CONDITIONS", "NOMPRES", "pressure"),
+    "nominal_load": ("VERTICAL", "FNOMIN", "force"),
+    "vertical_stiffness_nominal": ("VERTICAL", "VERTICAL_STIFFNESS", "force/length"),
+    "vertical_damping": ("VERTICAL", "VERTICAL_DAMPING", "force*time/length"),
+    "pfz1": ("VERTICAL", "PFZ1", ""),
+    "lambda_mu": ("SCALING_COEFFICIENTS", "LMUX", ""),
+    **{name: ("LONGITUDINAL_COEFFICIENTS", name.upper(), "") for name in _LONGITUDINAL},
+    **{name: ("LATERAL_COEFFICIENTS", name.upper(), "") for name in _LATERAL},
+    "breff": ("VERTICAL", "BREFF", ""),
+    "dreff": ("VERTICAL", "DREFF", ""),
+    "freff": ("VERTICAL", "FREFF", ""),
+}
+"""Where each :class:`TireParams` field stands in a ``.tir`` file: (section, key, dimension)."""
 
 
-@numba.njit(cache=True)
+def load_tire(path: str | Path | None = None) -> TireParams:
+    """The tyre of the ``.tir`` file at `path`; default the SUV's (named by ``mjcf/suv/parameters.toml``)."""
+    return TireParams.from_tir(suv_tire_file() if path is None else path)
+
+
+TireSlots = namedtuple("TireSlots", [f.name for f in fields(TireParams)])
+"""Named positions of the fields in :meth:`TireParams.to_array`."""
+SLOT = TireSlots(*range(len(fields(TireParams))))
+"""Position of each field in the packed vector ``tp``, by field name (``SLOT.pfz1``)."""
+N_PARAMS = len(SLOT)
+
+# module-level ints, frozen by numba as compile-time constants in the kernels; each is bound by
+# field name, so the numbers follow the field order of TireParams
+I_UNLOADED_RADIUS, I_NOMINAL_PRESSURE = SLOT.unloaded_radius, SLOT.nominal_pressure
+I_NOMINAL_LOAD, I_LAMBDA_MU = SLOT.nominal_load, SLOT.lambda_mu
+I_KT0, I_CT, I_PFZ1 = SLOT.vertical_stiffness_nominal, SLOT.vertical_damping, SLOT.pfz1
+I_PCX1, I_PDX1, I_PDX2, I_PEX1, I_PEX2 = SLOT.pcx1, SLOT.pdx1, SLOT.pdx2, SLOT.pex1, SLOT.pex2
+I_PEX3, I_PEX4, I_PKX1, I_PKX2, I_PKX3 = SLOT.pex3, SLOT.pex4, SLOT.pkx1, SLOT.pkx2, SLOT.pkx3
+I_PPX1, I_PPX2, I_PPX3, I_PPX4 = SLOT.ppx1, SLOT.ppx2, SLOT.ppx3, SLOT.ppx4
+I_PCY1, I_PDY1, I_PDY2, I_PEY1, I_PEY2 = SLOT.pcy1, SLOT.pdy1, SLOT.pdy2, SLOT.pey1, SLOT.pey2
+I_PEY3, I_PKY1, I_PKY2, I_PKY4 = SLOT.pey3, SLOT.pky1, SLOT.pky2, SLOT.pky4
+I_PPY1, I_PPY2, I_PPY3, I_PPY4 = SLOT.ppy1, SLOT.ppy2, SLOT.ppy3, SLOT.ppy4
+I_RBX1, I_RBX2, I_RCX1, I_REX1, I_REX2 = SLOT.rbx1, SLOT.rbx2, SLOT.rcx1, SLOT.rex1, SLOT.rex2
+I_RBY1, I_RBY2, I_RBY3 = SLOT.rby1, SLOT.rby2, SLOT.rby3
+I_RCY1, I_REY1, I_REY2 = SLOT.rcy1, SLOT.rey1, SLOT.rey2
+I_BREFF, I_DREFF, I_FREFF = SLOT.breff, SLOT.dreff, SLOT.freff
+
+
+@cached_njit
 def vertical_stiffness(pressure, tp):
     """Radial stiffness kt(p) = kt0·(1 + pFz1·dpi), N/m, at `pressure` (Pa).
 
-    Brancati & Tufano 2022, eq. 3–4; dpi = (p − p0)/p0 (MF 6.1 eq. 4.E2b).
+    Brancati & Tufano 2022, eq. 3–4; dpi = (p − p0)/p0 (MF 6.1 eq. 4.E2b); evaluated by
+    :func:`suvtwin.tire_stiffness.stiffness_at_pressure`.
     """
-    dpi = (pressure - tp[I_NOMINAL_PRESSURE]) / tp[I_NOMINAL_PRESSURE]  # eq. 4.E2b
-    return tp[I_KT0] * (1.0 + tp[I_PFZ1] * dpi)  # paper 000 eq. 3-4
+    return stiffness_at_pressure(pressure, tp[I_KT0], tp[I_NOMINAL_PRESSURE], tp[I_PFZ1])
 
 
 def pressure_from_stiffness(kt: npt.ArrayLike, params: TireParams) -> np.ndarray:
@@ -238,10 +298,12 @@ def pressure_from_stiffness(kt: npt.ArrayLike, params: TireParams) -> np.ndarray
         Inflation pressure, Pa, same shape as `kt`.
     """
     kt = np.asarray(kt, dtype=np.float64)
-    return params.nominal_pressure * (1.0 + (kt / params.vertical_stiffness_nominal - 1.0) / params.pfz1)
+    return pressure_at_stiffness_array(
+        kt, params.vertical_stiffness_nominal, params.nominal_pressure, params.pfz1
+    )
 
 
-@numba.njit(cache=True)
+@cached_njit
 def vertical_force(deflection, deflection_rate, pressure, tp):
     """Radial force Fz = kt(p)·δ + ct·δ̇, N, for δ > 0; clipped at 0; 0 when lifted off.
 
@@ -252,7 +314,7 @@ def vertical_force(deflection, deflection_rate, pressure, tp):
     return max(vertical_stiffness(pressure, tp) * deflection + tp[I_CT] * deflection_rate, 0.0)  # never pulls
 
 
-@numba.njit(cache=True)
+@cached_njit
 def effective_rolling_radius(fz, pressure, tp):
     """MF-Tyre 6.1 effective rolling radius, m, at load `fz` (N) and `pressure` (Pa).
 
@@ -265,21 +327,21 @@ def effective_rolling_radius(fz, pressure, tp):
     return tp[I_UNLOADED_RADIUS] - fz0 / cz * (tp[I_DREFF] * np.arctan(tp[I_BREFF] * rho) + tp[I_FREFF] * rho)
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _magic(b, c, d, e, x):
     # eq. 4.E9 / 4.E19 with zero shifts: y = D sin(C atan(Bx − E(Bx − atan Bx)))
     bx = b * x
     return d * np.sin(c * np.arctan(bx - e * (bx - np.arctan(bx))))
 
 
-@numba.njit(cache=True)
+@cached_njit
 def _weight(b, c, e, x):
     # eq. 4.E51 / 4.E59 with zero shifts (so G0 = 1): G = cos(C atan(Bx − E(Bx − atan Bx)))
     bx = b * x
     return np.cos(c * np.arctan(bx - e * (bx - np.arctan(bx))))
 
 
-@numba.njit(cache=True)
+@cached_njit
 def tire_forces(fz, kappa, alpha, pressure, tp):
     """MF-Tyre 6.1 combined-slip longitudinal and lateral force, N; camber 0, shifts 0.
 

@@ -3,9 +3,10 @@
 Usual call: ``vehicle = load_vehicle()`` (or ``load_vehicle(overrides={"chassis": {"mass": 1900}})``).
 
 ``mjcf/suv/parameters.toml`` holds every number with its unit, source and, where
-meaningful, bounds. This module reads it into frozen dataclasses (SI units) and
-derives what the builder and the tests need: corner positions, static loads,
-sprung mass per corner (Brancati & Tufano 2022, eq. 2).
+meaningful, bounds; the tyre's MF-Tyre coefficients are in the ``.tir`` file it
+names. This module reads it into frozen dataclasses (SI units) and derives what the
+builder and the tests need: corner positions, static loads, sprung mass per corner
+(Brancati & Tufano 2022, eq. 2).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from suvtwin.errors import InputError
+from suvtwin.tire_stiffness import tire_file_of
 
 __all__ = [
     "CORNERS",
@@ -139,6 +141,8 @@ class VehicleParams:
     steering: Steering
     tire: TireExtras
     driver: Driver
+    tire_file: Path
+    """The tyre's MF-Tyre property file (``.tir``) that the parameter file names in ``[tire.file]``."""
 
     @property
     def wheelbase(self) -> float:
@@ -223,7 +227,9 @@ def load_vehicle(path: str | Path = PARAMETER_FILE, *, overrides: dict | None = 
     ----------
     path : str or Path, optional
         TOML file with one table per parameter (``value``, ``unit``, ``source``);
-        default the SUV of paper 000, ``mjcf/suv/parameters.toml``.
+        default the SUV of paper 000, ``mjcf/suv/parameters.toml``. Its ``[tire.file]``
+        names the tyre's ``.tir`` file, relative to the parameter file's folder
+        (:attr:`VehicleParams.tire_file`; read by :func:`suvtwin.mjcf.tire.load_tire`).
     overrides : dict, optional
         ``{section: {name: value}}`` replacing file values (e.g. a scenario's).
     """
@@ -236,4 +242,4 @@ def load_vehicle(path: str | Path = PARAMETER_FILE, *, overrides: dict | None = 
         if missing:
             raise InputError(f"vehicle file {path}: section [{name}] lacks {', '.join(missing)}")
         sections[name] = cls(**{w: float(entries[w]["value"]) for w in wanted})
-    return VehicleParams(**sections).with_overrides(overrides)
+    return VehicleParams(**sections, tire_file=tire_file_of(path)).with_overrides(overrides)

@@ -310,6 +310,10 @@ def simulate_command(
     timestep: Annotated[
         float | None, typer.Option(help="Short form: integration step, s (1e-4–2e-3; default 1e-3).")
     ] = None,
+    tire: Annotated[
+        Path | None,
+        typer.Option("--tire", help="Tyre: a TNO MF-Tyre 6.1 property file (.tir); default the SUV's."),
+    ] = None,
     progress: Annotated[bool, typer.Option(help="Show a progress bar.")] = True,
 ) -> None:
     """Run the MuJoCo SUV through a scenario and write its ground truth and sensor signals."""
@@ -351,6 +355,10 @@ def simulate_command(
             seed=0 if seed is None else seed,
             timestep_s=1e-3 if timestep is None else timestep,
         )
+    if tire is not None:
+        if not tire.is_file():
+            raise InputError(f"--tire: file {str(tire)!r} does not exist")
+        sc = sc.model_copy(update={"tire_file": tire})
     result = simulate(sc, progress=progress)
     write_run(result, out)
     wall = result.metadata["wall_time_s"]

@@ -24,7 +24,7 @@ from suvtwin.errors import InputError
 from suvtwin.estimators.joint import LinearQuarterCar
 from suvtwin.estimators.quarter_car import sprung_mass_share
 from suvtwin.files import atomic_write, read_parquet_table
-from suvtwin.mjcf.tire import TireParams
+from suvtwin.mjcf.tire import load_tire
 from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
 from suvtwin.pipeline.estimator_registry import CornerSignals, estimate_columns, find_estimator
 from suvtwin.pipeline.scoring import PRESSURE_TOLERANCE_KPA, run_metrics
@@ -137,7 +137,7 @@ def linear_corner_model(corner: str, sprung_mass: float) -> LinearQuarterCar:
         unsprung_mass=float(vehicle.unsprung_mass[i]),
         spring_rate=float(vehicle.spring_rate[i]),
         damping=0.5 * (s.damper_compression_low + s.damper_rebound_low),
-        tire_damping=float(TireParams().vertical_damping),
+        tire_damping=float(load_tire(vehicle.tire_file).vertical_damping),
         roll_mass=float(vehicle.chassis.inertia_roll / (2.0 * half_track**2)),
         anti_roll=float(s.anti_roll_front if front else s.anti_roll_rear),
         damping_range=(

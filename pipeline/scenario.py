@@ -6,7 +6,9 @@ Usual call: ``scenario = load_scenario("s.yaml")`` or
 A scenario file (YAML, TOML or JSON) holds the run's duration, integration step,
 output rate, seed, speed (constant or a profile), road (a :class:`RoadSpec` or
 ``"flat"``), tire pressures and pressure events, extra loads, steering, sensor
-noise and the tire–road contact. Units in files are the user's: km/h, kPa, kg, s,
+noise, the tire–road contact and, optionally, the tyre as a TNO MF-Tyre 6.1 property
+file (``tire_file``, relative to the scenario file's folder; default the SUV's ``.tir``
+named by ``mjcf/suv/parameters.toml``). Units in files are the user's: km/h, kPa, kg, s,
 m, rad; :mod:`suvtwin.pipeline.simulator` converts to SI at the edge. Every problem is
 reported with its field path and allowed range.
 """
@@ -126,6 +128,7 @@ class Scenario(BaseModel):
     noise: NoiseSpec = Field(default_factory=NoiseSpec)
     contact: Literal["envelope", "native"] = "envelope"
     vehicle: dict[str, dict[str, float]] = Field(default_factory=dict)
+    tire_file: Path | None = None
 
     @field_validator("speed_kmh")
     @classmethod
@@ -265,6 +268,8 @@ def load_scenario(path: str | Path) -> Scenario:
         raise InputError(f"scenario file {str(path)!r} is malformed: {error}".replace("\n", " ")) from None
     if not isinstance(data, dict):
         raise InputError(f"scenario file {str(path)!r} must hold a mapping of fields")
+    if isinstance(data.get("tire_file"), str):  # relative to the scenario file
+        data = {**data, "tire_file": str(path.parent / data["tire_file"])}
     return parse_scenario(data, source=f"scenario {path.name}")
 
 

@@ -51,7 +51,7 @@ from suvtwin.mjcf.kernel import (
     road_height,
     step_kernel,
 )
-from suvtwin.mjcf.tire import effective_rolling_radius, vertical_stiffness
+from suvtwin.mjcf.tire import effective_rolling_radius, load_tire, vertical_stiffness
 from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
 from suvtwin.pipeline.scenario import END_MARGIN_M, START_MARGIN_M, Scenario
 from suvtwin.roads.profile import Road, generate_road
@@ -138,11 +138,13 @@ def _road_for(scenario: Scenario) -> tuple[Road, float]:
 def prepare(scenario: Scenario) -> _Prepared:
     """Build road, model and inputs, and place the car; nothing is stepped yet."""
     vehicle = load_vehicle(overrides=scenario.vehicle or None)
+    tire = load_tire(scenario.tire_file or vehicle.tire_file)
     road, half_width = _road_for(scenario)
     loads = tuple((ld.mass_kg, tuple(ld.position_m)) for ld in scenario.load)
     vm = build_model(
         vehicle,
         road,
+        tire=tire,
         contact=scenario.contact,
         timestep=scenario.timestep_s,
         loads=loads,

@@ -16,6 +16,7 @@ from suvtwin.errors import InputError
 from suvtwin.mjcf.tire import (
     TireParams,
     effective_rolling_radius,
+    load_tire,
     pressure_from_stiffness,
     tire_forces,
     tire_forces_array,
@@ -23,7 +24,7 @@ from suvtwin.mjcf.tire import (
     vertical_stiffness,
 )
 
-P = TireParams()
+P = load_tire()  # the SUV's .tir file
 TP = P.to_array()
 P0, FZ0, KT0 = 250e3, 5000.0, 264700.0  # the SUV operating point (module docstring)
 

@@ -11,7 +11,7 @@ import scipy.stats
 
 from suvtwin.mjcf.builder import build_model, flat_road_xml
 from suvtwin.mjcf.kernel import road_height
-from suvtwin.mjcf.tire import TireParams
+from suvtwin.mjcf.tire import load_tire
 from suvtwin.mjcf.vehicle import CORNERS, GRAVITY, load_vehicle, parameter_table
 from suvtwin.pipeline.scenario import parse_scenario
 from suvtwin.pipeline.simulator import read_run, simulate, write_run
@@ -20,7 +20,7 @@ from suvtwin.roads.spec import RoadSpec, SegmentSpec
 
 SUV_DIR = Path(str(resources.files("suvtwin.mjcf") / "suv"))
 VEHICLE = load_vehicle()
-TIRE = TireParams()
+TIRE = load_tire(VEHICLE.tire_file)
 QUIET = {"accel_sprung_mps2": 0.0, "accel_unsprung_mps2": 0.0}
 
 

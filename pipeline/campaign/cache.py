@@ -32,13 +32,15 @@ __all__ = [
 ]
 
 SIMULATION_SOURCES = ("suvtwin.mjcf", "suvtwin.pipeline.simulator", "suvtwin.pipeline.scenario",
-                      "suvtwin.roads.profile", "suvtwin.roads.spec", "suvtwin.roads.iso8608")  # fmt: skip
+                      "suvtwin.roads.profile", "suvtwin.roads.spec", "suvtwin.roads.iso8608",
+                      "suvtwin.tire_stiffness", "suvtwin.tir")  # fmt: skip
 """What a ground-truth run is made by (besides its scenario): modules and packages of suvtwin."""
 IDENTIFICATION_SOURCES = (*SIMULATION_SOURCES, "suvtwin.identification",
-                          "suvtwin.pipeline.identification_runs")  # fmt: skip
+                          "suvtwin.pipeline.identification_runs", "suvtwin.quarter_car_law")  # fmt: skip
 """What a parameter file is made by (besides its settings)."""
 ESTIMATION_SOURCES = ("suvtwin.estimators", "suvtwin.pipeline.estimator_registry",
-                      "suvtwin.pipeline.estimation", "suvtwin.pipeline.campaign")  # fmt: skip
+                      "suvtwin.pipeline.estimation", "suvtwin.pipeline.campaign",
+                      "suvtwin.quarter_car_law", "suvtwin.tire_stiffness", "suvtwin.tir")  # fmt: skip
 """What an estimate is made by (besides its run, estimator and parameter file)."""
 
 
