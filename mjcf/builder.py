@@ -46,6 +46,7 @@ import mujoco
 import numpy as np
 
 from suvtwin.errors import InputError
+from suvtwin.mjcf.kernel import pack_heightfield
 from suvtwin.mjcf.tire import TireParams, load_tire
 from suvtwin.mjcf.vehicle import CORNERS, GRAVITY, VehicleParams
 from suvtwin.roads.profile import Road
@@ -91,9 +92,9 @@ class VehicleModel:
         (body ids); ``susp_qpos``, ``susp_dof``, ``spin_qpos``, ``spin_dof``; ``steer_act``,
         ``drive_act`` (actuator ids); ``acc_sprung``, ``acc_unsprung`` (sensor adr).
     hfield : numpy.ndarray, shape (8,)
-        ``x0, dx, y0, dy, nrow, ncol, z_base, z_scale``: world x of column 0, column
-        spacing, world y of row 0, row spacing, rows, columns, height of data 0 and
-        metres per data unit.
+        The heightfield description, laid out by :data:`suvtwin.mjcf.kernel.HEIGHTFIELD_BLOCKS`
+        (world x of column 0, column spacing, world y of row 0, row spacing, rows, columns,
+        height of data 0 and metres per data unit).
     """
 
     model: mujoco.MjModel
@@ -371,18 +372,10 @@ def build_model(
         ),
     }
     ids = {k: v.astype(np.int64) for k, v in ids.items()}
-    hfield = np.array(
-        [
-            road.x[0],
-            road.spacing_m,
-            y[0],
-            y[1] - y[0],
-            grid.shape[0],
-            grid.shape[1],
-            z_min,
-            z_scale,
-        ]
-    )
+    hfield = pack_heightfield(
+        x0=road.x[0], dx=road.spacing_m, y0=y[0], dy=y[1] - y[0], nrow=grid.shape[0], ncol=grid.shape[1],
+        z_base=z_min, z_scale=z_scale,
+    )  # fmt: skip
     return VehicleModel(
         model=model,
         vehicle=vehicle,

@@ -59,6 +59,7 @@ from suvtwin.mjcf.vehicle import CORNERS, GRAVITY
 __all__ = [
     "CORNER_FIELDS",
     "GLOBAL_FIELDS",
+    "HEIGHTFIELD_BLOCKS",
     "ID_BLOCKS",
     "LOG_COLUMNS",
     "MODE_BLOCKS",
@@ -70,6 +71,7 @@ __all__ = [
     "STATE_BLOCKS",
     "VEHICLE_BLOCKS",
     "finish_log",
+    "pack_heightfield",
     "pack_ids",
     "pack_vehicle",
     "road_height",
@@ -276,6 +278,35 @@ M_KIND, M_LANE_Y, M_CENTRE_X = MODE.kind, MODE.lane_y_or_centre_x, MODE.lane_y_o
 M_CENTRE_Y, M_RADIUS, M_DIRECTION = MODE.centre_y, MODE.radius, MODE.direction
 
 
+HEIGHTFIELD_BLOCKS = (
+    ("x0", 1),  # world x of the grid's column 0, m
+    ("dx", 1),  # column spacing, m
+    ("y0", 1),  # world y of the grid's row 0, m
+    ("dy", 1),  # row spacing, m
+    ("nrow", 1),  # rows
+    ("ncol", 1),  # columns
+    ("z_base", 1),  # height of data value 0, m
+    ("z_scale", 1),  # metres per data unit
+)
+"""Blocks of the heightfield description ``hf`` (:attr:`suvtwin.mjcf.builder.VehicleModel.hfield`)."""
+HEIGHTFIELD, N_HEIGHTFIELD = _layout("HeightfieldSlots", HEIGHTFIELD_BLOCKS)
+H_X0, H_DX, H_Y0, H_DY = HEIGHTFIELD.x0, HEIGHTFIELD.dx, HEIGHTFIELD.y0, HEIGHTFIELD.dy
+H_NROW, H_NCOL = HEIGHTFIELD.nrow, HEIGHTFIELD.ncol
+H_Z_BASE, H_Z_SCALE = HEIGHTFIELD.z_base, HEIGHTFIELD.z_scale
+
+
+def pack_heightfield(**values: float) -> np.ndarray:
+    """Pack the heightfield description (:data:`HEIGHTFIELD_BLOCKS` names, SI units) into ``hf``."""
+    missing = sorted(set(HEIGHTFIELD._fields) - set(values))
+    unknown = sorted(set(values) - set(HEIGHTFIELD._fields))
+    if missing or unknown:
+        raise ValueError(f"pack_heightfield: missing {missing}, unknown {unknown}")
+    out = np.empty(N_HEIGHTFIELD)
+    for name, value in values.items():
+        out[getattr(HEIGHTFIELD, name)] = value
+    return out
+
+
 def pack_ids(ids: dict) -> np.ndarray:
     """Pack the builder's id dict (:data:`ID_BLOCKS` names) into the int64 layout above."""
     out = np.zeros(N_IDS, dtype=np.int64)
@@ -326,12 +357,13 @@ def pack_vehicle(vm) -> np.ndarray:
 def road_height(x, y, hf, hdata):
     """Heightfield elevation at world (x, y), m: bilinear in the grid, clamped at its edges.
 
-    `hf` = (x0, dx, y0, dy, nrow, ncol, z_base, z_scale) from :class:`suvtwin.mjcf.builder.VehicleModel`;
-    `hdata` the (nrow, ncol) data, height = z_base + data·z_scale.
+    `hf`: the heightfield description (:data:`HEIGHTFIELD_BLOCKS`) from
+    :class:`suvtwin.mjcf.builder.VehicleModel`; `hdata` the (nrow, ncol) data,
+    height = z_base + data·z_scale.
     """
-    nrow, ncol = int(hf[4]), int(hf[5])
-    fx = (x - hf[0]) / hf[1]
-    fy = (y - hf[2]) / hf[3]
+    nrow, ncol = int(hf[H_NROW]), int(hf[H_NCOL])
+    fx = (x - hf[H_X0]) / hf[H_DX]
+    fy = (y - hf[H_Y0]) / hf[H_DY]
     fx = min(max(fx, 0.0), ncol - 1.000001)
     fy = min(max(fy, 0.0), nrow - 1.000001)
     i, j = int(fy), int(fx)
@@ -339,7 +371,7 @@ def road_height(x, y, hf, hdata):
     h00, h01 = hdata[i, j], hdata[i, j + 1]
     h10, h11 = hdata[i + 1, j], hdata[i + 1, j + 1]
     h = (1 - ty) * ((1 - tx) * h00 + tx * h01) + ty * ((1 - tx) * h10 + tx * h11)
-    return hf[6] + h * hf[7]
+    return hf[H_Z_BASE] + h * hf[H_Z_SCALE]
 
 
 @cached_njit

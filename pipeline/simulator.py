@@ -33,6 +33,8 @@ from suvtwin.mjcf.builder import HALF_WIDTH_Y, VehicleModel, build_model
 from suvtwin.mjcf.kernel import (
     CORNER_FIELDS,
     GLOBAL_FIELDS,
+    H_NCOL,
+    H_NROW,
     LOG_COLUMNS,
     M_CENTRE_X,
     M_CENTRE_Y,
@@ -168,7 +170,7 @@ def prepare(scenario: Scenario) -> _Prepared:
         mode[M_CENTRE_X], mode[M_CENTRE_Y] = x0, y0 + sign * scenario.steering.radius_m
     else:
         mode[M_KIND] = MODE_OPEN_LOOP
-    hdata = model.hfield_data.reshape(int(vm.hfield[4]), int(vm.hfield[5]))
+    hdata = model.hfield_data.reshape(int(vm.hfield[H_NROW]), int(vm.hfield[H_NCOL]))
     # initial pose: level, at the static height over the mean road under the wheels
     corner = vehicle.corner_xy
     road_under = np.mean([road_height(x0 + cx, y0 + cy, vm.hfield, hdata) for cx, cy in corner])

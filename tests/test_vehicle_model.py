@@ -10,7 +10,7 @@ import scipy.signal
 import scipy.stats
 
 from suvtwin.mjcf.builder import build_model, flat_road_xml
-from suvtwin.mjcf.kernel import road_height
+from suvtwin.mjcf.kernel import H_NCOL, H_NROW, road_height
 from suvtwin.mjcf.tire import load_tire
 from suvtwin.mjcf.vehicle import CORNERS, GRAVITY, load_vehicle, parameter_table
 from suvtwin.pipeline.scenario import parse_scenario
@@ -68,7 +68,7 @@ def test_heightfield_reader_agrees_with_mujoco_ray_casts():
     vm = build_model(VEHICLE, road)
     data = mujoco.MjData(vm.model)
     mujoco.mj_forward(vm.model, data)
-    hdata = vm.model.hfield_data.reshape(int(vm.hfield[4]), int(vm.hfield[5]))
+    hdata = vm.model.hfield_data.reshape(int(vm.hfield[H_NROW]), int(vm.hfield[H_NCOL]))
     rng = np.random.default_rng(0)
     geomid = np.zeros(1, np.int32)
     track = 0.25 * (VEHICLE.chassis.track_front + VEHICLE.chassis.track_rear)
