@@ -12,7 +12,8 @@ function the body calls and every global number, string, tuple or array it reads
 one of those lives in another module and changes, numba still loads the old machine code
 (a stale kernel). :func:`cached_njit` adds to numba's key a digest of exactly those inputs,
 found by walking the function's globals: each compiled callee's bytecode, constants and
-names (and, recursively, its own inputs) and the value of each global constant. A change
+names and compile options (and, recursively, its own inputs) and the value of each global
+constant. A change
 anywhere in that set gives a new key, so numba compiles afresh; the old entry is never
 loaded again (nothing is deleted; numba drops the whole index itself when the function's
 own file changes).
@@ -111,6 +112,8 @@ def compiled_inputs(func: Callable) -> dict[str, str]:
         for name, value in sorted(found.items()):
             if _is_compiled(value):
                 todo.append(value.py_func)
+                # its options (error_model, fastmath, ...) shape the machine code too
+                inputs[f"{where}:{name}:options"] = repr(sorted(value.targetoptions.items()))
             elif isinstance(value, types.FunctionType) and value.__module__.split(".")[0] == package:
                 todo.append(value)
             elif (text := _constant_text(value)) is not None:

@@ -84,6 +84,16 @@ def test_changing_another_module_recompiles_the_caller(tmp_path, decorator, chan
     assert _run(tmp_path) == (value, 1, 0)  # the new code is cached in turn
 
 
+def test_changing_a_callees_compile_options_recompiles_the_caller(tmp_path):
+    (tmp_path / "pkg").mkdir()
+    (tmp_path / "pkg" / "__init__.py").write_text("")
+    (tmp_path / "pkg" / "main.py").write_text(textwrap.dedent(MAIN))
+    _write_dep(tmp_path, 2.0, 1.0, stamp=1_700_000_000, decorator="cached_njit")
+    assert _run(tmp_path) == (3.0, 0, 1)
+    _write_dep(tmp_path, 2.0, 1.0, stamp=1_700_000_100, decorator='cached_njit(error_model="numpy")')
+    assert _run(tmp_path) == (3.0, 0, 1)  # same code and constants, other options: compiled afresh
+
+
 def test_the_kernel_key_covers_the_tyre_model_and_vehicle_constants():
     inputs = compiled_inputs(kernel.step_kernel)
     for callee in ("vertical_force", "vertical_stiffness", "tire_forces", "effective_rolling_radius"):
