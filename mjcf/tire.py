@@ -87,6 +87,7 @@ __all__ = [
     "N_PARAMS",
     "SLOT",
     "TIR_KEYS",
+    "TIR_RANGES",
     "TireParams",
     "TireSlots",
     "effective_rolling_radius",
@@ -179,12 +180,14 @@ class TireParams:
         Raises
         ------
         InputError
-            If the file is malformed, lacks a key of :data:`TIR_KEYS`, or gives LMUX ≠ LMUY
-            (this model has one friction scaling); the message names the file, line and key.
+            If the file is malformed, lacks a key of :data:`TIR_KEYS`, gives a value outside
+            :data:`TIR_RANGES`, or LMUX ≠ LMUY (this model has one friction scaling); the
+            message names the file, line and key.
         """
         tir = read_tir(path)
         values = {
-            name: tir.number(section, key, dimension) for name, (section, key, dimension) in TIR_KEYS.items()
+            name: tir.number(section, key, dimension, **TIR_RANGES.get(name, {}))
+            for name, (section, key, dimension) in TIR_KEYS.items()
         }
         lmuy = tir.number("SCALING_COEFFICIENTS", "LMUY")
         if lmuy != values["lambda_mu"]:
@@ -196,8 +199,8 @@ class TireParams:
         return cls(**values)
 
     @classmethod
-    def from_mapping(cls, values: dict, *, base: TireParams | None = None) -> TireParams:
-        """`base` (default: the SUV's tyre, :func:`load_tire`) with `values` replaced (field → number, SI).
+    def from_mapping(cls, values: dict) -> TireParams:
+        """The SUV's tyre (:func:`load_tire`) with `values` replaced (field → number, SI).
 
         Raises
         ------
@@ -210,7 +213,7 @@ class TireParams:
             raise InputError(
                 f"tire: unknown parameter(s) {', '.join(unknown)}; expected some of {', '.join(known)}"
             )
-        merged = asdict(base if base is not None else load_tire())
+        merged = asdict(load_tire())
         for name, value in values.items():
             try:
                 number = float(value)
@@ -242,6 +245,16 @@ TIR_KEYS: dict[str, tuple[str, str, str]] = {
     "freff": ("VERTICAL", "FREFF", ""),
 }
 """Where each :class:`TireParams` field stands in a ``.tir`` file: (section, key, dimension)."""
+TIR_RANGES: dict[str, dict[str, float]] = {
+    "unloaded_radius": {"greater_than": 0.0},
+    "nominal_pressure": {"greater_than": 0.0},
+    "nominal_load": {"greater_than": 0.0},
+    "vertical_stiffness_nominal": {"greater_than": 0.0},
+    "vertical_damping": {"at_least": 0.0},
+    "pfz1": {"greater_than": 0.0},  # k_t rises with pressure; eq. 3-4 is inverted by dividing by it
+    "lambda_mu": {"greater_than": 0.0},
+}
+"""Allowed range (SI) of the fields that must be positive for the model to mean anything."""
 
 
 def load_tire(path: str | Path | None = None) -> TireParams:

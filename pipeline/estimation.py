@@ -81,6 +81,7 @@ def estimate_run(
     frame, meta, dt = _load_run(path, corner)
     vehicle = load_vehicle()
     scenario = meta.get("scenario", {})
+    _check_tire_law(path, scenario.get("tire_file"))
     load = sum(item.get("mass_kg", 0.0) for item in scenario.get("load", []))
     front = corner.startswith("f")
     ms = sprung_mass_share(
@@ -114,6 +115,27 @@ def estimate_run(
     }
     table = pd.DataFrame(estimate_columns(batch, 0, frame["t_s"].to_numpy()))
     return EstimateRun(table=table, metadata=metadata)
+
+
+def _check_tire_law(run: str | Path, tire_file: str | None) -> None:
+    """Refuse a run simulated with a tyre whose k_t(p) (Brancati & Tufano 2022, eq. 3–4) is not the
+    SUV tyre's: the estimators turn stiffness into pressure with the SUV tyre's law, so its
+    pressures would be biased without warning."""
+    if tire_file is None:
+        return
+    from suvtwin.tire_stiffness import TireStiffness, suv_tire_stiffness
+
+    try:
+        law = TireStiffness.from_tir(tire_file)
+    except InputError as error:
+        raise InputError(f"run {run} was simulated with the tyre file {tire_file}: {error}") from None
+    suv = suv_tire_stiffness()
+    if law != suv:
+        raise InputError(
+            f"run {run} was simulated with the tyre file {tire_file} (kt0 {law.kt0:g} N/m, p0 {law.p0:g} Pa, "
+            f"PFZ1 {law.pfz1:g}); the estimators assume the SUV tyre's k_t(p) (kt0 {suv.kt0:g} N/m, "
+            f"p0 {suv.p0:g} Pa, PFZ1 {suv.pfz1:g}), so its pressures would be biased"
+        )
 
 
 def linear_corner_model(corner: str, sprung_mass: float) -> LinearQuarterCar:

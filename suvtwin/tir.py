@@ -100,7 +100,10 @@ class TirFile:
         """The value of ``[section] key`` as written (a string entry such as a unit name)."""
         return self._entry(section, key).text
 
-    def number(self, section: str, key: str, dimension: str = "") -> float:
+    def number(
+        self, section: str, key: str, dimension: str = "", *, greater_than: float | None = None,
+        at_least: float | None = None,
+    ) -> float:
         """The value of ``[section] key`` in SI units.
 
         Parameters
@@ -111,12 +114,15 @@ class TirFile:
             Its dimension as a product/quotient of LENGTH, FORCE, PRESSURE, ANGLE, MASS,
             TIME (case-insensitive, e.g. ``"force/length"``, ``"force*time/length"``);
             ``""`` (default) for a dimensionless coefficient.
+        greater_than, at_least : float, optional
+            The allowed range of the value in SI units (``value > greater_than``,
+            ``value >= at_least``); default: any finite number.
 
         Raises
         ------
         InputError
-            If the key is missing, the value is not a finite number, or a unit it needs
-            is not one this reader knows.
+            If the key is missing, the value is not a finite number or outside its range,
+            or a unit it needs is not one this reader knows.
         """
         entry = self._entry(section, key)
         where = f"tyre file {self.path}, line {entry.line}: [{section.upper()}] {key.upper()}"
@@ -126,7 +132,12 @@ class TirFile:
             value = math.nan
         if entry.quoted or not math.isfinite(value):
             raise InputError(f"{where} must be a finite number, got {entry.text!r}")
-        return value * self._scale(dimension)
+        value *= self._scale(dimension)
+        if greater_than is not None and not value > greater_than:
+            raise InputError(f"{where} must be > {greater_than:g} (SI), got {entry.text}")
+        if at_least is not None and not value >= at_least:
+            raise InputError(f"{where} must be ≥ {at_least:g} (SI), got {entry.text}")
+        return value
 
     def _scale(self, dimension: str) -> float:
         scale = 1.0

@@ -107,9 +107,9 @@ class TireStiffness:
         """Read the three constants from a tyre property file (SI by its [UNITS])."""
         tir = read_tir(path)
         return cls(
-            kt0=tir.number("VERTICAL", "VERTICAL_STIFFNESS", "force/length"),
-            p0=tir.number("OPERATING_CONDITIONS", "NOMPRES", "pressure"),
-            pfz1=tir.number("VERTICAL", "PFZ1"),
+            kt0=tir.number("VERTICAL", "VERTICAL_STIFFNESS", "force/length", greater_than=0.0),
+            p0=tir.number("OPERATING_CONDITIONS", "NOMPRES", "pressure", greater_than=0.0),
+            pfz1=tir.number("VERTICAL", "PFZ1", greater_than=0.0),
         )
 
 

@@ -134,6 +134,10 @@ def test_keys_and_sections_are_case_insensitive(tmp_path):
         (lambda t: t.replace("RCY1                     = 1.0587", "RCY1 = 1.0587\nRCY1 = 1.06"), "RCY1",
          "given twice"),
         (lambda t: t.replace("= 8.386 ", "= 'oops "), "BREFF", "unclosed quote"),
+        (lambda t: t.replace("= 250000 ", "= 0 "), "NOMPRES", "must be > 0"),
+        (lambda t: t.replace("= 264700 ", "= -264700 "), "VERTICAL_STIFFNESS", "must be > 0"),
+        (lambda t: t.replace("= 0.7097 ", "= 0 "), "PFZ1", "must be > 0"),
+        (lambda t: t.replace("= 200 ", "= -1 "), "VERTICAL_DAMPING", "must be ≥ 0"),
     ],
 )  # fmt: skip
 def test_malformed_file_gives_one_message_naming_file_line_and_key(tmp_path, edit, key, expected):
@@ -203,6 +207,9 @@ def test_simulate_cli_takes_a_tire_file(tmp_path, capsys):
     table, meta = read_run(out)
     assert table["fl_tire_stiffness_npm"].iloc[0] == pytest.approx(344110.0 * (1 - 0.2 * 1.4194), rel=1e-14)
     assert meta["scenario"]["tire_file"] == str(stiff)
+    # the estimators assume the SUV tyre's k_t(p): a run of another tyre is refused, not biased
+    assert main(["estimate", str(out), "--estimator", "joint", "--out", str(tmp_path / "est.parquet")]) == 2
+    assert "k_t(p)" in capsys.readouterr().err and not (tmp_path / "est.parquet").exists()
     broken = _variant(tmp_path, lambda t: t.replace("= 13.728 ", "= x "), "broken.tir")
     assert main([*args, "--tire", str(broken)]) == 2
     assert f"line {_line_of(broken, 'PKX2')}" in capsys.readouterr().err
