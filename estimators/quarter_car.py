@@ -41,6 +41,7 @@ import numpy.typing as npt
 from suvtwin.quarter_car_law import sprung_acceleration, suspension_force, unsprung_acceleration
 from suvtwin.tire_stiffness import (
     pressure_at_stiffness_array,
+    pressure_sigma_at_stiffness_sigma,
     stiffness_at_pressure_array,
     suv_tire_stiffness,
 )
@@ -130,8 +131,7 @@ def pressure_sigma_from_stiffness_sigma(
     sigma_kt: npt.ArrayLike, *, kt0: float | None = None, p0: float | None = None, pfz1: float | None = None
 ):
     """Standard deviation of the pressure (Pa) for a k_t standard deviation (N/m): eq. 3–4 is linear."""
-    kt0, p0, pfz1 = _law(kt0, p0, pfz1)
-    return np.asarray(sigma_kt, dtype=float) * p0 / (kt0 * pfz1)
+    return pressure_sigma_at_stiffness_sigma(np.asarray(sigma_kt, dtype=float), *_law(kt0, p0, pfz1))
 
 
 # eq. 1 over broadcast arrays: ufuncs wrapping the compiled scalar law (compiled on first use)

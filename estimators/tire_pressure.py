@@ -65,7 +65,7 @@ from suvtwin.estimators.quarter_car import (
 from suvtwin.estimators.ukf import merwe_weights, ukf_predict, ukf_update
 from suvtwin.roads.iso8608 import class_level
 from suvtwin.roads.profile import SHAPE_FILTER_ALPHA, shape_filter_intensity, shape_filter_profile
-from suvtwin.tire_stiffness import suv_tire_stiffness
+from suvtwin.tire_stiffness import stiffness_sigma_at_pressure_sigma, suv_tire_stiffness
 
 __all__ = [
     "PAPER_TABLE_3",
@@ -331,7 +331,9 @@ def estimate_pressure(
 
     kt0 = stiffness_from_pressure(settings.pressure_guess_kpa * 1e3)
     tire = suv_tire_stiffness()
-    kt_sigma0 = tire.kt0 * tire.pfz1 * settings.pressure_sigma_kpa * 1e3 / tire.p0
+    kt_sigma0 = stiffness_sigma_at_pressure_sigma(
+        settings.pressure_sigma_kpa * 1e3, tire.kt0, tire.p0, tire.pfz1
+    )
     x = np.zeros((n_runs, n_modes, n))
     x[..., IX_KT] = kt0 if initial_stiffness is None else np.asarray(initial_stiffness, dtype=float)[:, None]
     if road_input == "true":  # start on the known road

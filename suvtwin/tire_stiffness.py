@@ -48,8 +48,10 @@ __all__ = [
     "TireStiffness",
     "pressure_at_stiffness",
     "pressure_at_stiffness_array",
+    "pressure_sigma_at_stiffness_sigma",
     "stiffness_at_pressure",
     "stiffness_at_pressure_array",
+    "stiffness_sigma_at_pressure_sigma",
     "suv_tire_file",
     "suv_tire_stiffness",
     "tire_file_of",
@@ -82,6 +84,18 @@ def stiffness_at_pressure_array(pressure, kt0, p0, pfz1):
 def pressure_at_stiffness_array(kt, kt0, p0, pfz1):
     """:func:`pressure_at_stiffness` as a ufunc (broadcast arrays), Pa."""
     return pressure_at_stiffness(kt, kt0, p0, pfz1)
+
+
+def pressure_sigma_at_stiffness_sigma(sigma_kt, kt0, p0, pfz1):
+    """Standard deviation of the pressure (Pa) for a k_t standard deviation `sigma_kt` (N/m), any
+    array shape: eq. 3–4 is linear, dp/dk_t = p0 / (kt0·pfz1)."""
+    return sigma_kt * p0 / (kt0 * pfz1)
+
+
+def stiffness_sigma_at_pressure_sigma(sigma_p, kt0, p0, pfz1):
+    """Standard deviation of k_t (N/m) for a pressure standard deviation `sigma_p` (Pa), any array
+    shape: dk_t/dp = kt0·pfz1 / p0 (eq. 3–4)."""
+    return kt0 * pfz1 * sigma_p / p0
 
 
 @dataclass(frozen=True)
