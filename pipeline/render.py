@@ -61,6 +61,12 @@ def render_run(
     os.environ.setdefault("MUJOCO_GL", "egl")
     import mujoco
 
+    if not hasattr(mujoco, "GLContext"):  # imported earlier in this process with its GL backends off
+        raise RenderUnavailable(
+            "MuJoCo was imported in this process without OpenGL (as `suvtwin simulate`, `identify` and "
+            "`run` do); render in a fresh process (`suvtwin render`)"
+        )
+
     from suvtwin.files import atomic_write
     from suvtwin.mjcf.vehicle import CORNERS
     from suvtwin.pipeline.scenario import parse_scenario
