@@ -30,6 +30,10 @@ def _cell(value: str, ok: bool | None) -> dict:
     return {"value": value, "pass": ok}
 
 
+def _goal(goal: str, criterion: str, cells: dict) -> dict:
+    return {"goal": goal, "criterion": criterion, "cells": cells}
+
+
 def goal_table(
     metrics: pd.DataFrame, mc_table: pd.DataFrame, series: dict, estimators: tuple[str, ...]
 ) -> list:
@@ -54,12 +58,11 @@ def goal_table(
                 "never" if not np.isfinite(t) else f"{t:.2f} s", bool(np.isfinite(t) and t <= CONVERGE_GOAL_S)
             )
         goals.append(
-            {
-                "goal": f"Converges in about 2 s on a class {run[-1]} road ({figure})",
-                "criterion": f"error within ±{PRESSURE_TOLERANCE_KPA:g} kPa (5 % of p0) "
-                f"from ≤ {CONVERGE_GOAL_S:g} s on",
-                "cells": cells,
-            }
+            _goal(
+                f"Converges in about 2 s on a class {run[-1]} road ({figure})",
+                f"error within ±{PRESSURE_TOLERANCE_KPA:g} kPa (5 % of p0) from ≤ {CONVERGE_GOAL_S:g} s on",
+                cells,
+            )
         )
     if (metrics.run == "switch_A_to_D").any():
         cells = {}
@@ -79,11 +82,11 @@ def goal_table(
                 ok,
             )
         goals.append(
-            {
-                "goal": "Mode probabilities follow the road class, A then D (Fig. 9)",
-                "criterion": "most probable mode (mean over 1–5 s, 6–end) is A, then D",
-                "cells": cells,
-            }
+            _goal(
+                "Mode probabilities follow the road class, A then D (Fig. 9)",
+                "most probable mode (mean over 1–5 s, 6–end) is A, then D",
+                cells,
+            )
         )
     if (metrics.run == "pressure_drop").any():
         cells = {}
@@ -96,12 +99,11 @@ def goal_table(
             worst = max(error[before].max(), error[after].max())
             cells[e] = _cell(f"max |error| {worst:.1f} kPa", bool(worst <= PRESSURE_TOLERANCE_KPA))
         goals.append(
-            {
-                "goal": "Tracks a 230 → 180 kPa drop over 1.5 s, converged in about 2 s (Fig. 10)",
-                "criterion": f"|error| ≤ {PRESSURE_TOLERANCE_KPA:g} kPa over 2–4 s "
-                "and from 2 s after the drop ends",
-                "cells": cells,
-            }
+            _goal(
+                "Tracks a 230 → 180 kPa drop over 1.5 s, converged in about 2 s (Fig. 10)",
+                f"|error| ≤ {PRESSURE_TOLERANCE_KPA:g} kPa over 2–4 s and from 2 s after the drop ends",
+                cells,
+            )
         )
     for run, label in (("mass_plus_8", "+8 %"), ("mass_plus_24", "+24 %")):
         if not (metrics.run == run).any():
@@ -111,11 +113,11 @@ def goal_table(
             v = scen(run, e)["mean_abs_error_after_2s_pct"]
             cells[e] = _cell(f"{v:.1f} %", bool(v < 5.0))
         goals.append(
-            {
-                "goal": f"Mean error below 5 % with sprung mass {label}, model mass unchanged (Fig. 11)",
-                "criterion": "mean |error| / true pressure after 2 s < 5 %",
-                "cells": cells,
-            }
+            _goal(
+                f"Mean error below 5 % with sprung mass {label}, model mass unchanged (Fig. 11)",
+                "mean |error| / true pressure after 2 s < 5 %",
+                cells,
+            )
         )
     if (metrics.run == "non_iso_road").any():
         cells = {}
@@ -123,11 +125,11 @@ def goal_table(
             v = scen("non_iso_road", e)["mean_abs_error_after_2s_pct"]
             cells[e] = _cell(f"{v:.1f} %", bool(v < 5.0))
         goals.append(
-            {
-                "goal": "Estimates the pressure on a road of no ISO class (Fig. 13)",
-                "criterion": "mean |error| / true pressure after 2 s < 5 %",
-                "cells": cells,
-            }
+            _goal(
+                "Estimates the pressure on a road of no ISO class (Fig. 13)",
+                "mean |error| / true pressure after 2 s < 5 %",
+                cells,
+            )
         )
     if not mc_table.empty:
         end = mc_table[mc_table.t_s == mc_table.t_s.max()].set_index("estimator")
@@ -140,22 +142,22 @@ def goal_table(
             for e in estimators
         }
         goals.append(
-            {
-                "goal": f"Monte Carlo ({n} runs): mean error around zero (Fig. 6, eq. 23)",
-                "criterion": f"|mean error| at the end ≤ {PRESSURE_TOLERANCE_KPA:g} kPa",
-                "cells": cells,
-            }
+            _goal(
+                f"Monte Carlo ({n} runs): mean error around zero (Fig. 6, eq. 23)",
+                f"|mean error| at the end ≤ {PRESSURE_TOLERANCE_KPA:g} kPa",
+                cells,
+            )
         )
         cells = {}
         for e in estimators:
             ratio = end.loc[e, "error_std_kpa"] / end.loc[e, "sigma_bound_kpa"]
             cells[e] = _cell(f"std / σ = {ratio:.2f}", bool(0.5 <= ratio <= 2.0))
         goals.append(
-            {
-                "goal": "Monte Carlo: the error std converges to the filter's σ-bound (Fig. 6, eq. 24–25)",
-                "criterion": "error std / mean σ-bound at the end within 0.5–2",
-                "cells": cells,
-            }
+            _goal(
+                "Monte Carlo: the error std converges to the filter's σ-bound (Fig. 6, eq. 24–25)",
+                "error std / mean σ-bound at the end within 0.5–2",
+                cells,
+            )
         )
         cells = {}
         for e in estimators:
@@ -163,11 +165,11 @@ def goal_table(
                 f"{end.loc[e, 'inside_2sigma'] * 100:.0f} %", bool(end.loc[e, "inside_2sigma"] >= 0.9)
             )
         goals.append(
-            {
-                "goal": "Monte Carlo: the sample errors stay within the σ-bounds (Fig. 6)",
-                "criterion": "≥ 90 % of runs inside ±2σ at the end",
-                "cells": cells,
-            }
+            _goal(
+                "Monte Carlo: the sample errors stay within the σ-bounds (Fig. 6)",
+                "≥ 90 % of runs inside ±2σ at the end",
+                cells,
+            )
         )
         cells = {}
         for e in estimators:
@@ -181,10 +183,10 @@ def goal_table(
             a, b = end.loc[e, "rmse_kpa"], end.loc[single, "rmse_kpa"]
             cells[e] = _cell(f"RMSE {a:.1f} vs {b:.1f} kPa", bool(a < b))
         goals.append(
-            {
-                "goal": "Monte Carlo: the IMM outperforms the single UKF (Fig. 6)",
-                "criterion": "IMM RMSE at the end < single UKF's (same road input)",
-                "cells": cells,
-            }
+            _goal(
+                "Monte Carlo: the IMM outperforms the single UKF (Fig. 6)",
+                "IMM RMSE at the end < single UKF's (same road input)",
+                cells,
+            )
         )
     return goals
