@@ -229,3 +229,17 @@ def test_results_of_other_code_get_other_keys(tmp_path, monkeypatch):
     assert cache.source_digest(("digest_probe_pkg.model",)) != cache.source_digest(
         ("digest_probe_pkg",)
     )
+
+
+def test_a_run_key_follows_the_contents_of_its_tyre_file(tmp_path):
+    from dataclasses import replace
+
+    spec = next(s for s in campaign_specs(preset("quick")) if s.kind == "monte_carlo")
+    fingerprint = {"code": "x", "versions": {}}
+    tire = tmp_path / "t.tir"
+    tire.write_text("[VERTICAL]\nPFZ1 = 0.7\n")
+    named = replace(spec, scenario={**spec.scenario, "tire_file": str(tire)})
+    first = named.key(fingerprint)
+    assert first != spec.key(fingerprint)
+    tire.write_text("[VERTICAL]\nPFZ1 = 0.8\n")  # same name, other tyre: another run
+    assert named.key(fingerprint) != first

@@ -13,7 +13,9 @@ each class band from (seed, name).
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -47,7 +49,13 @@ class RunSpec:
     info: dict = field(default_factory=dict)
 
     def key(self, fingerprint: dict) -> str:
-        return digest({"scenario": self.scenario, "model": fingerprint})
+        """Hash of what makes the run: scenario, code and libraries, and the contents of a tyre
+        file the scenario names (editing that file must not reuse the old run)."""
+        made_by = {"scenario": self.scenario, "model": fingerprint}
+        tire_file = self.scenario.get("tire_file")
+        if tire_file and Path(tire_file).is_file():
+            made_by["tire_file_sha256"] = hashlib.sha256(Path(tire_file).read_bytes()).hexdigest()
+        return digest(made_by)
 
 
 def _road_length(speed_kmh: float, duration_s: float) -> float:
