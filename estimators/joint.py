@@ -69,7 +69,7 @@ References
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 import numpy.typing as npt
@@ -82,6 +82,7 @@ from suvtwin.estimators.quarter_car import (
     stiffness_from_pressure,
 )
 from suvtwin.jit import cached_njit
+from suvtwin.tire_stiffness import TireStiffness, suv_tire_stiffness
 
 __all__ = [
     "JointEstimate",
@@ -410,6 +411,7 @@ def estimate_joint(
     damping_points: int = 4,
     waviness: float | tuple[float, float] = (1.5, 3.0),
     waviness_iso_weight: float = 0.8,
+    tire: TireStiffness | None = None,
 ) -> JointEstimate:
     """Estimate k_t (and p) jointly with the road level from the two accelerations.
 
@@ -453,6 +455,9 @@ def estimate_joint(
         spike and slab prior: the rest uniform over the range). 0: w uniform over the range. The
         default 0.8 keeps nearly the precision of w = 2 on w = 2 roads and removes most of the bias
         elsewhere (see the module's "Waviness").
+    tire : TireStiffness, optional
+        The tyre's k_t(p) constants (eq. 3–4) for the pressure grid and the result; default the
+        SUV's tyre.
 
     Returns
     -------
@@ -470,7 +475,9 @@ def estimate_joint(
         raise InputError("the joint estimator needs a positive speed")
     p_lo, p_hi, p_step = pressure_grid_kpa
     pressures = np.arange(p_lo, p_hi + 0.5 * p_step, p_step) * 1e3
-    stiffness = stiffness_from_pressure(pressures)
+    tire = tire or suv_tire_stiffness()
+    law = asdict(tire)  # kt0, p0, pfz1
+    stiffness = stiffness_from_pressure(pressures, **law)
     grid_var = np.diff(stiffness).mean() ** 2 / 12.0 if stiffness.size > 1 else 0.0
     if fixed_level is not None:
         levels = np.array([fixed_level, fixed_level], dtype=float)
@@ -591,8 +598,8 @@ def estimate_joint(
         t_s=np.arange(n_steps) * dt,
         stiffness=kt_hat,
         stiffness_sigma=kt_sig,
-        pressure_pa=pressure_from_stiffness(kt_hat),
-        pressure_sigma_pa=pressure_sigma_from_stiffness_sigma(kt_sig),
+        pressure_pa=pressure_from_stiffness(kt_hat, **law),
+        pressure_sigma_pa=pressure_sigma_from_stiffness_sigma(kt_sig, **law),
         road_level=level_hat,
         info={
             "estimator": "joint",

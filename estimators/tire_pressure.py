@@ -40,7 +40,7 @@ below, batched over runs and modes, built from :mod:`suvtwin.estimators.imm` and
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from importlib import resources
 from pathlib import Path
 
@@ -65,7 +65,7 @@ from suvtwin.estimators.quarter_car import (
 from suvtwin.estimators.ukf import merwe_weights, ukf_predict, ukf_update
 from suvtwin.roads.iso8608 import class_level
 from suvtwin.roads.profile import SHAPE_FILTER_ALPHA, shape_filter_intensity, shape_filter_profile
-from suvtwin.tire_stiffness import stiffness_sigma_at_pressure_sigma, suv_tire_stiffness
+from suvtwin.tire_stiffness import TireStiffness, stiffness_sigma_at_pressure_sigma, suv_tire_stiffness
 
 __all__ = [
     "PAPER_TABLE_3",
@@ -245,6 +245,7 @@ def estimate_pressure(
     seed: int | npt.ArrayLike = 0,
     initial_stiffness: npt.ArrayLike | None = None,
     road_levels: npt.ArrayLike | None = None,
+    tire: TireStiffness | None = None,
 ) -> PressureEstimate:
     """Run the IMM of UKFs (or one UKF, for one mode) over a batch of runs.
 
@@ -271,6 +272,8 @@ def estimate_pressure(
         Initial k_t estimate per run, N/m (default from ``settings.pressure_guess_kpa``).
     road_levels : array_like (S,), optional
         Road roughness Gd(n0) each mode assumes, m³ (default: its class's level).
+    tire : TireStiffness, optional
+        The tyre's k_t(p) constants (eq. 3–4); default the SUV's tyre.
     """
     settings = settings or EstimatorSettings()
     acc_s = np.atleast_2d(np.asarray(acc_sprung, dtype=float))
@@ -329,8 +332,8 @@ def estimate_pressure(
     R = measurement_noise(settings.sigma_sprung, settings.sigma_unsprung)
     w = merwe_weights(n, alpha=settings.alpha, beta=settings.beta, kappa=settings.kappa)
 
-    kt0 = stiffness_from_pressure(settings.pressure_guess_kpa * 1e3)
-    tire = suv_tire_stiffness()
+    tire = tire or suv_tire_stiffness()
+    kt0 = stiffness_from_pressure(settings.pressure_guess_kpa * 1e3, kt0=tire.kt0, p0=tire.p0, pfz1=tire.pfz1)
     kt_sigma0 = stiffness_sigma_at_pressure_sigma(
         settings.pressure_sigma_kpa * 1e3, tire.kt0, tire.p0, tire.pfz1
     )
@@ -372,7 +375,7 @@ def estimate_pressure(
             semi_implicit=settings.discretization == "semi-implicit",
             signed_damper=settings.damper_law == "signed",
         )  # fmt: skip
-        return _result(kt_hat, kt_sig, mode_prob, mode_kt, repairs, dt, modes, road_input, settings)
+        return _result(kt_hat, kt_sig, mode_prob, mode_kt, repairs, dt, modes, road_input, settings, tire)
 
     def fx(sig_pts, k):
         zr = sig_pts[..., 5] if augmented else 0.5 * (road_in[..., k] + road_in[..., k + 1])
@@ -410,18 +413,21 @@ def estimate_pressure(
         kt_sig[:, k] = np.sqrt(np.maximum(np.sum(mu * spread, axis=-1), 0.0))
         mode_prob[:, k] = mu
         mode_kt[:, k] = x[..., IX_KT]
-    return _result(kt_hat, kt_sig, mode_prob, mode_kt, repairs, dt, modes, road_input, settings)
+    return _result(kt_hat, kt_sig, mode_prob, mode_kt, repairs, dt, modes, road_input, settings, tire)
 
 
-def _result(kt_hat, kt_sig, mode_prob, mode_kt, repairs, dt, modes, road_input, settings) -> PressureEstimate:
+def _result(
+    kt_hat, kt_sig, mode_prob, mode_kt, repairs, dt, modes, road_input, settings, tire: TireStiffness
+) -> PressureEstimate:
     n_steps = kt_hat.shape[1]
     n_modes = len(modes.classes)
+    law = asdict(tire)  # kt0, p0, pfz1
     return PressureEstimate(
         t_s=np.arange(n_steps) * dt,
         stiffness=kt_hat,
         stiffness_sigma=kt_sig,
-        pressure_pa=pressure_from_stiffness(kt_hat),
-        pressure_sigma_pa=pressure_sigma_from_stiffness_sigma(kt_sig),
+        pressure_pa=pressure_from_stiffness(kt_hat, **law),
+        pressure_sigma_pa=pressure_sigma_from_stiffness_sigma(kt_sig, **law),
         mode_probability=mode_prob if n_modes > 1 else None,
         mode_stiffness=mode_kt,
         classes=modes.classes,

@@ -81,7 +81,9 @@ def estimate_run(
     frame, meta, dt = _load_run(path, corner)
     vehicle = load_vehicle()
     scenario = meta.get("scenario", {})
-    _check_tire_law(path, scenario.get("tire_file"))
+    tire_file = scenario.get("tire_file")  # a run made with another tyre is estimated with its k_t(p)
+    if tire_file is not None and not Path(tire_file).is_file():
+        raise InputError(f"run {path} was simulated with the tyre file {tire_file}, which is not there now")
     load = sum(item.get("mass_kg", 0.0) for item in scenario.get("load", []))
     front = corner.startswith("f")
     ms = sprung_mass_share(
@@ -101,6 +103,7 @@ def estimate_run(
         unsprung_mass=float(mus),
         params=params,
         seeds=np.array([seed]),
+        tire_file=tire_file,
     )
     batch = entry.run(signals)
     metadata = {
@@ -117,28 +120,9 @@ def estimate_run(
     return EstimateRun(table=table, metadata=metadata)
 
 
-def _check_tire_law(run: str | Path, tire_file: str | None) -> None:
-    """Refuse a run simulated with a tyre whose k_t(p) (Brancati & Tufano 2022, eq. 3–4) is not the
-    SUV tyre's: the estimators turn stiffness into pressure with the SUV tyre's law, so its
-    pressures would be biased without warning."""
-    if tire_file is None:
-        return
-    from suvtwin.tire_stiffness import TireStiffness, suv_tire_stiffness
-
-    try:
-        law = TireStiffness.from_tir(tire_file)
-    except InputError as error:
-        raise InputError(f"run {run} was simulated with the tyre file {tire_file}: {error}") from None
-    suv = suv_tire_stiffness()
-    if law != suv:
-        raise InputError(
-            f"run {run} was simulated with the tyre file {tire_file} (kt0 {law.kt0:g} N/m, p0 {law.p0:g} Pa, "
-            f"PFZ1 {law.pfz1:g}); the estimators assume the SUV tyre's k_t(p) (kt0 {suv.kt0:g} N/m, "
-            f"p0 {suv.p0:g} Pa, PFZ1 {suv.pfz1:g}), so its pressures would be biased"
-        )
-
-
-def linear_corner_model(corner: str, sprung_mass: float) -> LinearQuarterCar:
+def linear_corner_model(
+    corner: str, sprung_mass: float, *, tire_file: str | Path | None = None
+) -> LinearQuarterCar:
     """The SUV corner as a linear roll-plane corner model for the joint estimator.
 
     `sprung_mass` (kg) is the heave mode's; the unsprung mass, spring rate at the wheel, tire radial
@@ -148,7 +132,8 @@ def linear_corner_model(corner: str, sprung_mass: float) -> LinearQuarterCar:
     rebound slopes, depending on the suspension velocity: the estimator marginalizes over that range
     (``damping`` is the low-speed mean). Leaving out the anti-roll bar or the digressive damper
     biases the pressure high; ``python bench/joint_mujoco.py`` compares this model with the plain
-    quarter car on a campaign's MuJoCo runs."""
+    quarter car on a campaign's MuJoCo runs. `tire_file`: the tyre of the run (``.tir``, its radial
+    damping), default the SUV's."""
     vehicle = load_vehicle()
     s = vehicle.suspension
     i = CORNERS.index(corner)
@@ -159,7 +144,7 @@ def linear_corner_model(corner: str, sprung_mass: float) -> LinearQuarterCar:
         unsprung_mass=float(vehicle.unsprung_mass[i]),
         spring_rate=float(vehicle.spring_rate[i]),
         damping=0.5 * (s.damper_compression_low + s.damper_rebound_low),
-        tire_damping=float(load_tire(vehicle.tire_file).vertical_damping),
+        tire_damping=float(load_tire(tire_file or vehicle.tire_file).vertical_damping),
         roll_mass=float(vehicle.chassis.inertia_roll / (2.0 * half_track**2)),
         anti_roll=float(s.anti_roll_front if front else s.anti_roll_rear),
         damping_range=(

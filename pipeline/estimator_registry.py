@@ -20,7 +20,7 @@ when called, so the command line can build its options from the table.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -63,7 +63,8 @@ class CornerSignals:
     `unsprung_mass`: the corner's masses the estimator assumes, kg (paper 000 eq. 2);
     `params`: the mode parameter file of model-bank estimators (``"identified"``, ``"paper"``
     or a path); `seeds`: one int per run (synthetic roads); `initial_pressure_kpa`: the initial
-    estimate per run, kPa, or None for the estimator's default.
+    estimate per run, kPa, or None for the estimator's default; `tire_file`: the tyre the runs
+    were made with (a ``.tir`` file; its k_t(p), eq. 3–4, and damping), None for the SUV's.
     """
 
     acc_sprung: np.ndarray
@@ -76,6 +77,7 @@ class CornerSignals:
     params: str | Path = "identified"
     seeds: np.ndarray | None = None
     initial_pressure_kpa: np.ndarray | None = None
+    tire_file: str | Path | None = None
 
 
 @dataclass(frozen=True)
@@ -128,6 +130,10 @@ def _run_mode_bank(
 
     from suvtwin.estimators.quarter_car import pressure_from_stiffness, stiffness_from_pressure
     from suvtwin.estimators.tire_pressure import estimate_pressure, load_modes
+    from suvtwin.tire_stiffness import tire_stiffness_of
+
+    tire = tire_stiffness_of(signals.tire_file)
+    law = asdict(tire)  # kt0, p0, pfz1
 
     modes = load_modes(signals.params)
     if classes is not None:
@@ -137,19 +143,21 @@ def _run_mode_bank(
                 f"the single UKF uses the class {', '.join(missing)} mode, which the parameter file lacks"
             )
         modes = modes.subset(classes)
-    initial = signals.initial_pressure_kpa
+    initial = None if signals.initial_pressure_kpa is None else np.asarray(signals.initial_pressure_kpa) * 1e3
     seeds = 0 if signals.seeds is None else np.asarray(signals.seeds)
     est = estimate_pressure(
         signals.acc_sprung, signals.acc_unsprung, signals.dt, modes=modes, sprung_mass=signals.sprung_mass,
         unsprung_mass=signals.unsprung_mass, road_input=road_input, speed_mps=signals.speed_mps, seed=seeds,
-        initial_stiffness=None if initial is None else stiffness_from_pressure(np.asarray(initial) * 1e3),
+        initial_stiffness=None if initial is None else stiffness_from_pressure(initial, **law),
+        tire=tire,
     )  # fmt: skip
     columns: dict[str, np.ndarray] = {}
     if est.mode_probability is not None:
         for s, letter in enumerate(est.classes):
             columns[f"mode_prob_{letter}"] = est.mode_probability[:, :, s]
     for s, letter in enumerate(est.classes):
-        columns[f"mode_pressure_{letter}_kpa"] = pressure_from_stiffness(est.mode_stiffness[:, :, s]) / 1e3
+        mode_pressure = pressure_from_stiffness(est.mode_stiffness[:, :, s], **law)
+        columns[f"mode_pressure_{letter}_kpa"] = mode_pressure / 1e3
     return BatchEstimate(
         pressure_pa=est.pressure_pa,
         pressure_sigma_pa=est.pressure_sigma_pa,
@@ -165,11 +173,13 @@ def _run_joint(signals: CornerSignals) -> BatchEstimate:
     (:func:`suvtwin.pipeline.estimation.linear_corner_model`)."""
     from suvtwin.estimators.joint import estimate_joint
     from suvtwin.pipeline.estimation import linear_corner_model
+    from suvtwin.tire_stiffness import tire_stiffness_of
 
-    qc = linear_corner_model(signals.corner, signals.sprung_mass)
+    qc = linear_corner_model(signals.corner, signals.sprung_mass, tire_file=signals.tire_file)
     est = estimate_joint(
-        signals.acc_sprung, signals.acc_unsprung, signals.dt, qc=qc, speed_mps=signals.speed_mps
-    )
+        signals.acc_sprung, signals.acc_unsprung, signals.dt, qc=qc, speed_mps=signals.speed_mps,
+        tire=tire_stiffness_of(signals.tire_file),
+    )  # fmt: skip
     return BatchEstimate(
         pressure_pa=est.pressure_pa,
         pressure_sigma_pa=est.pressure_sigma_pa,

@@ -55,6 +55,7 @@ __all__ = [
     "suv_tire_file",
     "suv_tire_stiffness",
     "tire_file_of",
+    "tire_stiffness_of",
 ]
 
 
@@ -151,6 +152,11 @@ def suv_tire_file() -> Path:
     of that layer is imported.
     """
     return tire_file_of(Path(str(resources.files("suvtwin.mjcf") / "suv" / "parameters.toml")))
+
+
+def tire_stiffness_of(tire_file: str | Path | None) -> TireStiffness:
+    """The constants of eq. 3–4 of the tyre in `tire_file` (``.tir``); None: the SUV's tyre."""
+    return suv_tire_stiffness() if tire_file is None else TireStiffness.from_tir(tire_file)
 
 
 @functools.cache
