@@ -112,6 +112,7 @@ def estimate_run(
         "estimator": entry.family,
         "road_input": entry.road_input,
         "seed": seed,
+        "tire_file": tire_file,
         "sprung_mass_kg": ms,
         "unsprung_mass_kg": float(mus),
         **batch.info,
