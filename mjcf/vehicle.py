@@ -242,4 +242,4 @@ def load_vehicle(path: str | Path = PARAMETER_FILE, *, overrides: dict | None = 
         if missing:
             raise InputError(f"vehicle file {path}: section [{name}] lacks {', '.join(missing)}")
         sections[name] = cls(**{w: float(entries[w]["value"]) for w in wanted})
-    return VehicleParams(**sections, tire_file=tire_file_of(path)).with_overrides(overrides)
+    return VehicleParams(**sections, tire_file=tire_file_of(path, table)).with_overrides(overrides)

@@ -128,8 +128,10 @@ class TireStiffness:
         )
 
 
-def tire_file_of(parameter_file: str | Path) -> Path:
+def tire_file_of(parameter_file: str | Path, table: dict | None = None) -> Path:
     """The ``.tir`` file a vehicle parameter file names in ``[tire.file]``, relative to its folder.
+
+    `table`: the parameter file already parsed (it is read here if None).
 
     Raises
     ------
@@ -137,8 +139,10 @@ def tire_file_of(parameter_file: str | Path) -> Path:
         If the parameter file has no ``[tire.file]`` entry with a string ``value``.
     """
     parameter_file = Path(parameter_file)
-    with open(parameter_file, "rb") as handle:
-        entry = tomllib.load(handle).get("tire", {}).get("file", {})
+    if table is None:
+        with open(parameter_file, "rb") as handle:
+            table = tomllib.load(handle)
+    entry = table.get("tire", {}).get("file", {})
     name = entry.get("value") if isinstance(entry, dict) else None
     if not isinstance(name, str) or not name:
         raise InputError(f'vehicle file {parameter_file}: [tire.file] needs value = "<tyre file>.tir"')
