@@ -48,21 +48,12 @@ def monte_carlo_figure(series: dict, estimators: tuple[str, ...]) -> str:
         for row in errors[: min(10, errors.shape[0])]:
             ax.plot(t[::step], row[::step], color="tab:green", lw=0.4, alpha=0.5)
         ax.plot(t[::step], idx.mean_error[::step], color="tab:red", lw=1.5, label="mean error (eq. 23)")
-        for sign in (1, -1):
-            ax.plot(
-                t[::step],
-                sign * idx.error_std[::step],
-                "b--",
-                lw=1,
-                label="± error std (eq. 24)" if sign > 0 else None,
-            )
-            ax.plot(
-                t[::step],
-                sign * idx.sigma_bound[::step],
-                "k--",
-                lw=1,
-                label="± mean σ-bound (eq. 25)" if sign > 0 else None,
-            )
+        for band, style, label in (
+            (idx.error_std, "b--", "± error std (eq. 24)"),
+            (idx.sigma_bound, "k--", "± mean σ-bound (eq. 25)"),
+        ):
+            for sign in (1, -1):
+                ax.plot(t[::step], sign * band[::step], style, lw=1, label=label if sign > 0 else None)
         lim = np.nanmax(np.abs(idx.mean_error[t >= 1.0])) + 2 * np.nanmax(idx.error_std[t >= 1.0])
         ax.set_ylim(-min(max(lim, 30.0), 400.0), min(max(lim, 30.0), 400.0))
         ax.set_ylabel("truth − estimate, kPa")
