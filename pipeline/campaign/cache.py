@@ -24,6 +24,7 @@ from suvtwin.files import package_versions
 __all__ = [
     "ESTIMATION_SOURCES",
     "IDENTIFICATION_SOURCES",
+    "PREMISE_SOURCES",
     "SIMULATION_SOURCES",
     "digest",
     "model_fingerprint",
@@ -42,6 +43,9 @@ ESTIMATION_SOURCES = ("suvtwin.estimators", "suvtwin.pipeline.estimator_registry
                       "suvtwin.pipeline.estimation", "suvtwin.pipeline.campaign",
                       "suvtwin.quarter_car_law", "suvtwin.tire_stiffness", "suvtwin.tir")  # fmt: skip
 """What an estimate is made by (besides its run, estimator and parameter file)."""
+PREMISE_SOURCES = (*ESTIMATION_SOURCES, "suvtwin.pipeline.premise", "suvtwin.pipeline.scoring",
+                   "suvtwin.roads")  # fmt: skip
+"""What paper 000's premise check is made by (besides its runs per class and seed)."""
 
 
 def digest(obj: object, n: int = 12) -> str:
@@ -77,6 +81,7 @@ def model_fingerprint(sources: tuple[str, ...] = SIMULATION_SOURCES) -> dict:
 
 def remove_stale_temporaries(out: Path) -> None:
     """Delete temporary files a killed run left behind (finished files are never temporary)."""
-    for pattern in ("runs/.*.tmp*", "estimates/*/.*.tmp*", "identification/*/.*.tmp*", ".*.tmp*"):
+    for pattern in ("runs/.*.tmp*", "estimates/*/.*.tmp*", "identification/*/.*.tmp*", "premise/.*.tmp*",
+                    ".*.tmp*"):  # fmt: skip
         for path in out.glob(pattern):
             path.unlink(missing_ok=True)

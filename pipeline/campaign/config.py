@@ -58,6 +58,8 @@ class CampaignConfig(BaseModel):
     """Skip the identification: a parameter file, ``"identified"`` (shipped) or ``"paper"`` (Table 3)."""
     initial_pressure_sigma_kpa: float = Field(default=60.0, ge=0.0, le=150.0)
     chunk_size: int = Field(default=25, ge=1, le=1000)
+    premise_runs_per_class: int = Field(default=25, ge=0, le=1000)
+    """Runs per class A–D of paper 000's premise check (:mod:`suvtwin.pipeline.premise`); 0: none."""
 
     @model_validator(mode="after")
     def _known_names(self) -> CampaignConfig:
@@ -79,11 +81,22 @@ class CampaignConfig(BaseModel):
 
 
 def preset(name: str, **overrides) -> CampaignConfig:
-    """The ``quick`` (40 Monte Carlo runs, GA 100 × 100) or ``full`` (paper scale: 100 runs, GA 100 × 1000)
-    campaign, with optional field overrides (e.g. ``monte_carlo_runs=40``)."""
+    """The ``quick`` (40 Monte Carlo runs, GA 100 × 100, premise check 6 runs per class) or ``full``
+    (paper scale: 100 runs, GA 100 × 1000, premise check 25 runs per class) campaign, with optional
+    field overrides (e.g. ``monte_carlo_runs=40``)."""
     presets = {
-        "quick": {"name": "quick", "monte_carlo_runs": 40, "identification": {"pop_size": 100, "n_gen": 100}},
-        "full": {"name": "full", "monte_carlo_runs": 100, "identification": {"pop_size": 100, "n_gen": 1000}},
+        "quick": {
+            "name": "quick",
+            "monte_carlo_runs": 40,
+            "identification": {"pop_size": 100, "n_gen": 100},
+            "premise_runs_per_class": 6,
+        },
+        "full": {
+            "name": "full",
+            "monte_carlo_runs": 100,
+            "identification": {"pop_size": 100, "n_gen": 1000},
+            "premise_runs_per_class": 25,
+        },
     }
     if name not in presets:
         raise InputError(f"campaign preset must be quick or full, got {name!r}")

@@ -29,6 +29,7 @@ from suvtwin.files import atomic_write, package_versions
 from suvtwin.pipeline.campaign.cache import (
     ESTIMATION_SOURCES,
     IDENTIFICATION_SOURCES,
+    PREMISE_SOURCES,
     digest,
     model_fingerprint,
     remove_stale_temporaries,
@@ -248,6 +249,29 @@ def _estimation(
     return est_paths, n_est
 
 
+def _premise(config: CampaignConfig, out: Path):
+    """Paper 000's premise check (:mod:`suvtwin.pipeline.premise`): its summary per class and
+    estimator (None when the configuration asks for no runs), and whether it was run now. The
+    runs' scores are cached in ``premise/runs-<key>.csv``; the summary is always made from that file."""
+    if config.premise_runs_per_class == 0:
+        return None, False
+    import pandas as pd
+
+    from suvtwin.pipeline.premise import premise_study, premise_summary
+
+    key = digest(
+        {"runs_per_class": config.premise_runs_per_class, "seed": config.seed,
+         "model": model_fingerprint(PREMISE_SOURCES)}
+    )  # fmt: skip
+    path = out / "premise" / f"runs-{key}.csv"
+    made = not path.is_file()
+    if made:
+        runs = premise_study(config.premise_runs_per_class, seed=config.seed)
+        path.parent.mkdir(exist_ok=True)
+        atomic_write(path, lambda tmp: runs.to_csv(tmp, index=False, float_format="%.6g"))
+    return premise_summary(pd.read_csv(path)), made
+
+
 def run_campaign(config: CampaignConfig, out: str | Path, *, jobs: int = 1, progress: bool = False) -> dict:
     """Run (or resume) the campaign in folder `out`; write metrics and the report there.
 
@@ -288,6 +312,11 @@ def run_campaign(config: CampaignConfig, out: str | Path, *, jobs: int = 1, prog
     atomic_write(out / "metrics.csv", lambda tmp: metrics.to_csv(tmp, index=False, float_format="%.6g"))
     atomic_write(out / "monte_carlo.csv", lambda tmp: mc_table.to_csv(tmp, index=False, float_format="%.6g"))
     timings["scoring_s"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    premise, timings["premise_made"] = _premise(config, out)
+    if premise is not None:
+        atomic_write(out / "premise.csv", lambda tmp: premise.to_csv(tmp, index=False, float_format="%.6g"))
+    timings["premise_s"] = time.perf_counter() - t0
     summary = {
         "config": config.model_dump(mode="json"),
         "config_hash": digest(config.model_dump(mode="json")),
@@ -301,7 +330,8 @@ def run_campaign(config: CampaignConfig, out: str | Path, *, jobs: int = 1, prog
     from suvtwin.pipeline.report import write_report
 
     t0 = time.perf_counter()
-    write_report(out / "report.html", config, specs, metrics, mc_table, series, params_path, summary)
+    write_report(out / "report.html", config, specs, metrics, mc_table, series, params_path, summary,
+                 premise=premise)  # fmt: skip
     timings["report_s"] = time.perf_counter() - t0
     timings["total_s"] = time.perf_counter() - started
     atomic_write(out / "campaign.json", lambda tmp: Path(tmp).write_text(json.dumps(summary, indent=2)))

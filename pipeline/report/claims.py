@@ -20,7 +20,7 @@ import pandas as pd
 from suvtwin.pipeline.estimator_registry import ESTIMATORS
 from suvtwin.pipeline.scoring import PRESSURE_TOLERANCE_KPA
 
-__all__ = ["CONVERGE_GOAL_S", "goal_table"]
+__all__ = ["CONVERGE_GOAL_S", "goal_table", "premise_goals", "premise_verdict"]
 
 CONVERGE_GOAL_S = 3.0
 """'Converges in about 2 s': pass if the error stays within ±5 % of p0 from ≤ 3 s on."""
@@ -190,3 +190,102 @@ def goal_table(
             )
         )
     return goals
+
+
+def premise_goals(summary: pd.DataFrame, baselines: dict[str, str]) -> list:
+    """Paper 000's claims on its own quarter car and roads at the class centres, per class.
+
+    `summary`: one row per road class and estimator, as
+    :func:`suvtwin.pipeline.premise.premise_summary` writes it (``road_class``, ``estimator``,
+    ``runs``, ``median_time_to_converge_s``, ``converged_fraction``, ``mean_error_kpa``,
+    ``error_std_kpa``, ``sigma_bound_kpa``, ``rmse_kpa``, ``inside_2sigma``,
+    ``right_mode_probability``, ``most_probable_mode``); `baselines`: model bank → its single
+    UKF. The criteria are those of :func:`goal_table`, applied to each class's runs: converged
+    (median over the runs ≤ :data:`CONVERGE_GOAL_S`), |mean error| ≤ 12.5 kPa, error std /
+    σ-bound within 0.5–2, ≥ 90 % of the runs inside ±2σ (all at the end), the driven class's
+    mode the most probable, and the model bank's RMSE below its single UKF's.
+
+    Returns a list of ``{"goal", "criterion", "cells": {estimator: {"value", "pass"}}}`` in the
+    format of :func:`goal_table`, one per claim and class; ``pass`` is None where a claim does
+    not apply (mode probabilities of one UKF, a model bank without its baseline, the std of one run).
+    """
+    estimators = tuple(dict.fromkeys(summary["estimator"]))
+    classes = tuple(dict.fromkeys(summary["road_class"]))
+    rows = {(r.road_class, r.estimator): r for r in summary.itertuples(index=False)}
+    tol = PRESSURE_TOLERANCE_KPA
+
+    def cells(c: str, judge) -> dict:
+        out = {}
+        for e in estimators:
+            r = rows.get((c, e))
+            out[e] = _cell("—", None) if r is None else _cell(*judge(r, e))
+        return out
+
+    def converge(r, e):
+        t = r.median_time_to_converge_s
+        shown = f"{t:.2f} s" if np.isfinite(t) else "never"
+        return f"median {shown}; {r.converged_fraction * 100:.0f} % of {r.runs} runs converge", bool(
+            np.isfinite(t) and t <= CONVERGE_GOAL_S
+        )
+
+    def mean_error(r, e):
+        return f"{r.mean_error_kpa:+.1f} kPa", bool(abs(r.mean_error_kpa) <= tol)
+
+    def std_ratio(r, e):
+        ratio = r.error_std_kpa / r.sigma_bound_kpa if r.sigma_bound_kpa > 0 else np.inf
+        if not np.isfinite(r.error_std_kpa):
+            return "one run", None
+        return f"{r.error_std_kpa:.1f} / {r.sigma_bound_kpa:.1f} kPa = {ratio:.2g}", bool(0.5 <= ratio <= 2.0)
+
+    def inside(r, e):
+        return f"{r.inside_2sigma * 100:.0f} %", bool(r.inside_2sigma >= 0.9)
+
+    def mode(r, e):
+        if not np.isfinite(r.right_mode_probability):
+            return "—", None
+        return (
+            f"most probable {r.most_probable_mode}; mode {r.road_class}: {r.right_mode_probability:.2f}",
+            r.most_probable_mode == r.road_class,
+        )
+
+    def beats_single(r, e):
+        single = baselines.get(e)
+        if single is None:
+            return "—", None
+        other = rows.get((r.road_class, single))
+        if other is None:
+            return "no single UKF run", None
+        return f"RMSE {r.rmse_kpa:.1f} vs {other.rmse_kpa:.1f} kPa", bool(r.rmse_kpa < other.rmse_kpa)
+
+    claims = (
+        ("converges in about 2 s (Fig. 7–8)",
+         f"median over the runs of the time from which |error| ≤ {tol:g} kPa to the end"
+         f" ≤ {CONVERGE_GOAL_S:g} s",
+         converge),
+        ("mean error around zero (Fig. 6, eq. 23)", f"|mean error| at the end ≤ {tol:g} kPa", mean_error),
+        ("the error std converges to the σ-bound (Fig. 6, eq. 24–25)",
+         "error std / mean σ-bound at the end within 0.5–2", std_ratio),
+        ("the errors stay within the σ-bounds (Fig. 6)", "≥ 90 % of runs inside ±2σ at the end", inside),
+        ("the mode of the class driven is the most probable (Fig. 7–9)",
+         "highest mean mode probability from 2 s on is the class's", mode),
+        ("the IMM outperforms the single UKF (Fig. 6)", "RMSE at the end < single UKF's (same road input)",
+         beats_single),
+    )  # fmt: skip
+    return [
+        _goal(f"Class {c}: {claim}", criterion, cells(c, judge))
+        for claim, criterion, judge in claims
+        for c in classes
+    ]
+
+
+def premise_verdict(goals: list, estimator: str) -> dict:
+    """Whether `estimator` meets every applicable claim of :func:`premise_goals`.
+
+    Returns ``{"met", "applicable", "holds", "failed"}``: claims met, claims that apply, whether
+    all that apply are met (False when none applies), and the goals it falls short of.
+    """
+    judged = [(g["goal"], g["cells"][estimator]["pass"]) for g in goals if estimator in g["cells"]]
+    judged = [(goal, ok) for goal, ok in judged if ok is not None]
+    failed = [goal for goal, ok in judged if not ok]
+    return {"met": len(judged) - len(failed), "applicable": len(judged), "holds": bool(judged) and not failed,
+            "failed": failed}  # fmt: skip
