@@ -29,6 +29,7 @@ SMALL = dict(
     estimators=("imm_synthetic", "ukf_augmented", "joint"),
     params_file="paper",
     chunk_size=2,
+    premise_runs_per_class=1,
 )
 
 
@@ -124,6 +125,7 @@ def test_campaign_writes_metrics_report_and_reuses_its_work(finished):
     before = (out / "metrics.csv").read_bytes()
     again = run_campaign(preset("quick", **SMALL), out, jobs=1)
     assert again["timings"]["simulated_runs"] == 0 and again["timings"]["estimates_made"] == 0
+    assert summary["timings"]["premise_made"] is True and again["timings"]["premise_made"] is False
     assert (out / "metrics.csv").read_bytes() == before
 
 
@@ -140,6 +142,14 @@ def test_report_is_self_contained_with_goals_and_figures(finished):
         assert claim in page
     assert page.count("✓ pass") + page.count("✗ falls short") >= 3 * 4
     assert "Table 3" in page and "Monte Carlo, 3 runs" in page
+    # paper 000's premise check: its own quarter car, roads at the class centres, beside the SUV's results
+    assert "Paper 000 under its own conditions" in page
+    assert "Class D: the IMM outperforms the single UKF" in page
+    assert "meets" in page and "IMM, true road given (control)" in page
+    premise = pd.read_csv(out / "premise.csv")
+    assert set(premise.road_class) == set("ABCD") and (premise.runs == 1).all()
+    assert {"imm_synthetic", "ukf_synthetic", "imm_true_road"} <= set(premise.estimator)
+    assert np.isfinite(premise.rmse_kpa).all()
 
 
 def _count(folder: Path, pattern: str) -> int:
@@ -172,7 +182,7 @@ def test_a_killed_campaign_resumes_to_the_uninterrupted_result(finished, tmp_pat
     assert summary["timings"]["estimates_made"] == 15 - done_estimates
     assert _count(resumed, "runs/*.parquet") == 5 and _count(resumed, "estimates/*/*.parquet") == 15
     assert not list(resumed.rglob(".*tmp*"))
-    for name in ("metrics.csv", "monte_carlo.csv"):
+    for name in ("metrics.csv", "monte_carlo.csv", "premise.csv"):
         assert (resumed / name).read_bytes() == (out / name).read_bytes()
 
 

@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from suvtwin.pipeline.report.claims import CONVERGE_GOAL_S, goal_table
+from suvtwin.pipeline.report.claims import CONVERGE_GOAL_S, goal_table, premise_goals, premise_verdict
 
 EMPTY_MC = pd.DataFrame()
 
@@ -146,6 +146,75 @@ def test_monte_carlo_claims_at_the_end_of_the_runs():
     mc_better = _mc_table({"imm_synthetic": {"rmse_kpa": 7.9}, "ukf_synthetic": {"rmse_kpa": 8.0}})
     cells = _goal(goal_table(metrics, mc_better, {}, ("imm_synthetic", "ukf_synthetic")), "outperforms")
     assert cells["imm_synthetic"]["pass"] is True
+
+
+def _premise_row(road_class: str, estimator: str, **changes) -> dict:
+    """A summary row of the premise check that meets every claim, with `changes`."""
+    row = {"road_class": road_class, "estimator": estimator, "runs": 6, "median_time_to_converge_s": 1.5,
+           "converged_fraction": 1.0, "mean_error_kpa": 2.0, "error_std_kpa": 8.0, "sigma_bound_kpa": 8.0,
+           "rmse_kpa": 8.0, "inside_2sigma": 1.0, "right_mode_probability": 0.9,
+           "most_probable_mode": road_class}  # fmt: skip
+    if estimator.startswith("ukf"):
+        row.update(right_mode_probability=np.nan, most_probable_mode="", rmse_kpa=20.0)
+    return {**row, **changes}
+
+
+PREMISE_BASELINES = {"imm_synthetic": "ukf_synthetic", "imm_augmented": "ukf_augmented"}
+
+
+def test_premise_claims_pass_on_numbers_that_meet_them_and_fail_one_by_one():
+    rows = [_premise_row(c, e) for c in "AB" for e in ("imm_synthetic", "ukf_synthetic")]
+    goals = premise_goals(pd.DataFrame(rows), PREMISE_BASELINES)
+    assert len(goals) == 6 * 2  # six claims, two classes
+    assert all(g["cells"]["imm_synthetic"]["pass"] is True for g in goals)
+    verdict = premise_verdict(goals, "imm_synthetic")
+    assert verdict == {"met": 12, "applicable": 12, "holds": True, "failed": []}
+    # a single UKF has no mode probabilities and no baseline: those claims do not apply to it
+    single = premise_verdict(goals, "ukf_synthetic")
+    assert single["applicable"] == 8 and single["holds"] is True
+
+    failing = {
+        "converges in about 2 s": {"median_time_to_converge_s": CONVERGE_GOAL_S + 0.01},
+        "mean error around zero": {"mean_error_kpa": -12.6},
+        "converges to the σ-bound": {"error_std_kpa": 16.1},
+        "within the σ-bounds": {"inside_2sigma": 0.89},
+        "the most probable": {"most_probable_mode": "D"},
+        "outperforms the single UKF": {"rmse_kpa": 20.0},
+    }
+    for words, change in failing.items():
+        changed = [_premise_row("B", "imm_synthetic", **change) if r["road_class"] == "B"
+                   and r["estimator"] == "imm_synthetic" else r for r in rows]  # fmt: skip
+        goals = premise_goals(pd.DataFrame(changed), PREMISE_BASELINES)
+        failed = premise_verdict(goals, "imm_synthetic")["failed"]
+        expected = [g["goal"] for g in goals if g["goal"].startswith("Class B") and words in g["goal"]]
+        assert failed == expected, words
+        assert len(failed) == 1 and premise_verdict(goals, "imm_synthetic")["holds"] is False
+
+
+def test_premise_claims_at_their_thresholds_and_where_they_do_not_apply():
+    rows = [
+        _premise_row("A", "imm_synthetic", median_time_to_converge_s=CONVERGE_GOAL_S, mean_error_kpa=12.5,
+                     error_std_kpa=4.0, inside_2sigma=0.9),
+        _premise_row("A", "imm_augmented", median_time_to_converge_s=np.inf, converged_fraction=0.0,
+                     error_std_kpa=np.nan, sigma_bound_kpa=0.0),
+        _premise_row("A", "ukf_synthetic"),
+    ]  # fmt: skip
+    goals = premise_goals(pd.DataFrame(rows), PREMISE_BASELINES)
+    converge = _goal(goals, "Class A: converges")
+    assert converge["imm_synthetic"]["pass"] is True
+    assert converge["imm_augmented"]["pass"] is False
+    assert converge["imm_augmented"]["value"].startswith("median never")
+    assert _goal(goals, "Class A: mean error")["imm_synthetic"]["pass"] is True
+    ratio = _goal(goals, "Class A: the error std")
+    assert ratio["imm_synthetic"]["pass"] is True  # 4 / 8 = 0.5
+    assert ratio["imm_augmented"]["pass"] is None  # one run: no std
+    assert _goal(goals, "Class A: the errors stay")["imm_synthetic"]["pass"] is True
+    better = _goal(goals, "Class A: the IMM outperforms")
+    assert better["imm_augmented"] == {"value": "no single UKF run", "pass": None}
+    assert better["ukf_synthetic"]["pass"] is None
+    assert _goal(goals, "Class A: the mode")["ukf_synthetic"]["pass"] is None
+    # no claim that applies: the verdict does not hold
+    assert premise_verdict([], "imm_synthetic")["holds"] is False
 
 
 def test_the_evaluation_and_the_registry_import_no_plotting_library():
