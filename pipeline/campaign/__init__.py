@@ -14,7 +14,10 @@ Stages, in order (Brancati & Tufano 2022, §5.2–5.4):
    also on the runs with extra load: the paper's sensitivity test keeps the quarter car's
    sprung mass fixed.
 4. **Scoring** — per run and estimator, and the Monte Carlo indexes (eq. 23–25)
-   (:mod:`.metrics`); then :mod:`suvtwin.pipeline.report` writes ``report.html``.
+   (:mod:`.metrics`);
+5. **Premise check** — paper 000's IMM and single UKF on its own quarter car, roads at the class
+   centres (:mod:`suvtwin.pipeline.premise`, ``premise.csv``); then
+   :mod:`suvtwin.pipeline.report` writes ``report.html``.
 
 Modules: :mod:`.config` (settings and presets), :mod:`.runs` (run specs and draws),
 :mod:`.cache` (content-addressed files, atomic writes, stale temporaries), :mod:`.execution`

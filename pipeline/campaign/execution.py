@@ -6,7 +6,9 @@ Stages (Brancati & Tufano 2022, §5.2–5.4): identification (or a given paramet
 ground-truth runs, estimation (each estimator of the configuration, from
 :data:`suvtwin.pipeline.estimator_registry.ESTIMATORS`, on the chosen corner's accelerometers,
 with the *nominal* corner masses, paper 000 eq. 2), scoring
-(:mod:`suvtwin.pipeline.campaign.metrics`) and the report (:mod:`suvtwin.pipeline.report`).
+(:mod:`suvtwin.pipeline.campaign.metrics`), paper 000's premise check (its IMM on its own quarter
+car, roads at the class centres: :mod:`suvtwin.pipeline.premise`, ``premise.csv``) and the report
+(:mod:`suvtwin.pipeline.report`).
 Every unit of work is a file of the content-addressed cache
 (:mod:`suvtwin.pipeline.campaign.cache`), so a re-run reuses finished work and an interrupted
 run resumes where it stopped. Each estimate depends on its own run only (per-run seeds; the
@@ -316,6 +318,8 @@ def run_campaign(config: CampaignConfig, out: str | Path, *, jobs: int = 1, prog
     premise, timings["premise_made"] = _premise(config, out)
     if premise is not None:
         atomic_write(out / "premise.csv", lambda tmp: premise.to_csv(tmp, index=False, float_format="%.6g"))
+    else:  # none asked for: no premise.csv of an earlier configuration left beside these results
+        (out / "premise.csv").unlink(missing_ok=True)
     timings["premise_s"] = time.perf_counter() - t0
     summary = {
         "config": config.model_dump(mode="json"),

@@ -96,14 +96,13 @@ code,pre{background:#f6f6f6;padding:1px 4px} pre{padding:0.6em;overflow-x:auto;f
 """
 
 
-def _per_class(table: pd.DataFrame, estimator: str, column: str, unit: str) -> str:
-    """'A 6.0 kPa, B 319 kPa, …': one column of the premise summary for one estimator, per class."""
-    rows = table[table.estimator == estimator]
-    return ", ".join(
-        f"{r.road_class} {'never' if not np.isfinite(getattr(r, column)) else f'{getattr(r, column):.3g}'}"
-        f"{'' if not np.isfinite(getattr(r, column)) else unit}"
-        for r in rows.itertuples(index=False)
-    )
+def _per_class(table: pd.DataFrame, estimator: str, column: str, unit: str, *, sign: bool = False) -> str:
+    """'A 6.0 kPa, B 319 kPa, …': one column of the premise summary for one estimator, per class
+    ('never' for an infinite time; `sign`: always show the sign)."""
+    parts = []
+    for c, v in zip(*(table[table.estimator == estimator][k] for k in ("road_class", column)), strict=True):
+        parts.append(f"{c} never" if not np.isfinite(v) else f"{c} {v:{'+' if sign else ''}.3g}{unit}")
+    return ", ".join(parts)
 
 
 def _premise_html(premise: pd.DataFrame, config) -> list[str]:
@@ -147,7 +146,7 @@ def _premise_html(premise: pd.DataFrame, config) -> list[str]:
             parts.append(line + "</p>")
             numbers = (
                 f"RMSE at the end {_per_class(premise, paper, 'rmse_kpa', ' kPa')}; mean error (truth − "
-                f"estimate, eq. 23) {_per_class(premise, paper, 'mean_error_kpa', ' kPa')}; median time to "
+                f"estimate, eq. 23) {_per_class(premise, paper, 'mean_error_kpa', ' kPa', sign=True)}; median time to "
                 f"converge {_per_class(premise, paper, 'median_time_to_converge_s', ' s')}"
             )
             others = [
