@@ -294,6 +294,7 @@ def premise_summary(runs: pd.DataFrame) -> pd.DataFrame:
         idx = monte_carlo_indexes(truth, est, sig)
         error = (est - truth)[:, 0]
         probs = {k: g[f"mode_prob_{k}"].mean() for k in PAPER_CLASSES if f"mode_prob_{k}" in g}
+        probs = {k: v for k, v in probs.items() if np.isfinite(v)}  # a single model has none (NaN in a file)
         rows.append(
             {
                 "road_class": c,

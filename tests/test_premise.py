@@ -2,6 +2,7 @@
 study gives finite scores in the campaign's format."""
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from suvtwin.errors import InputError
@@ -54,7 +55,7 @@ def test_the_draws_follow_table_4_and_the_acceleration_grows_with_the_class(trut
     assert np.array_equal(again.road, truth.road[::3, :2000])
 
 
-def test_the_study_gives_finite_scores_and_the_true_road_control_finds_the_pressure():
+def test_the_study_gives_finite_scores_and_the_true_road_control_finds_the_pressure(tmp_path):
     runs = premise_study(1, seed=7)
     names = (*PREMISE_ESTIMATORS, *CONTROLS)
     assert len(runs) == 4 * len(names) and set(runs.estimator) == set(names)
@@ -72,7 +73,13 @@ def test_the_study_gives_finite_scores_and_the_true_road_control_finds_the_press
     assert np.all(np.isfinite(summary[["mean_error_kpa", "rmse_kpa", "sigma_bound_kpa", "inside_2sigma"]]))
     assert np.all(np.isnan(summary.error_std_kpa))  # one run per class: no std (eq. 24, N - 1)
     single = summary[summary.estimator.str.startswith("ukf")]
-    assert single.right_mode_probability.isna().all()
+    assert single.right_mode_probability.isna().all() and (single.most_probable_mode == "").all()
+    # the same summary from the runs as the campaign stores them (a CSV file)
+    stored = tmp_path / "runs.csv"
+    runs.to_csv(stored, index=False)
+    again = premise_summary(pd.read_csv(stored))
+    assert (again.most_probable_mode.fillna("") == summary.most_probable_mode).all()
+    assert np.allclose(again.rmse_kpa, summary.rmse_kpa)
 
 
 def test_bad_study_input_is_one_clear_message():
