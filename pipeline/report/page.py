@@ -146,8 +146,10 @@ def _premise_html(premise: pd.DataFrame, config) -> list[str]:
             parts.append(line + "</p>")
             numbers = (
                 f"RMSE at the end {_per_class(premise, paper, 'rmse_kpa', ' kPa')}; mean error (truth − "
-                f"estimate, eq. 23) {_per_class(premise, paper, 'mean_error_kpa', ' kPa', sign=True)}; median time to "
-                f"converge {_per_class(premise, paper, 'median_time_to_converge_s', ' s')}"
+                f"estimate, eq. 23) {_per_class(premise, paper, 'mean_error_kpa', ' kPa', sign=True)}; the σ-bound "
+                f"it reports (eq. 25) {_per_class(premise, paper, 'sigma_bound_kpa', ' kPa')}; fraction of runs inside ±2σ "
+                f"{_per_class(premise, paper, 'inside_2sigma', '')}; median time to converge "
+                f"{_per_class(premise, paper, 'median_time_to_converge_s', ' s')}"
             )
             others = [
                 f"{html.escape(labels[e])} {verdict[e]['met']}/{verdict[e]['applicable']} "
