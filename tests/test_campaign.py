@@ -205,9 +205,10 @@ def test_bad_campaign_input_is_one_clear_message(tmp_path, capsys):
 def test_identification_is_cached_one_class_at_a_time(tmp_path):
     ident = {"classes": "AB", "pop_size": 8, "n_gen": 2, "duration_s": 2.0}
     settings = dict(monte_carlo_runs=0, scenarios=("class_A",), estimators=("imm_synthetic",), duration_s=8.0,
-                    identification=ident)  # fmt: skip
+                    identification=ident, premise_runs_per_class=0)  # fmt: skip
     first = run_campaign(preset("quick", **settings), tmp_path, jobs=2)
     assert first["identification"]["classes_run"] == ["A", "B"]
+    assert not (tmp_path / "premise.csv").exists()  # no premise check asked for
     folder = Path(first["params_file"]).parent
     params = json.loads(Path(first["params_file"]).read_text())
     assert set(params["classes"]) == {"A", "B"} and params["metadata"]["algorithm"]["n_gen"] == 2
