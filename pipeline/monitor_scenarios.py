@@ -232,16 +232,21 @@ def _warning(i: int, duration_s: float = 60.0, loss: float = 0.20) -> BenchRun:
 
 
 def _weave_series(rng: np.random.Generator, v_kmh: float, duration_s: float) -> tuple[list, float, float]:
-    """Cosine road-wheel angle (bicycle model δ = L·a_y/v²) of a weave at 0.15–0.4 Hz whose
-    lateral acceleration amplitude is 1–4 m/s² but whose lateral swing a_y/ω² stays ≤ 1 m."""
+    """Road-wheel angle (bicycle model δ = L·a_y/v²) of a weave at 0.2–0.4 Hz whose lateral
+    acceleration amplitude is 1–4 m/s² but whose lateral swing a_y/ω² stays ≤ 0.7 m (the wheels
+    within the 4 m road strip unless the car drifts)."""
     wheelbase = load_vehicle().wheelbase
     v = v_kmh / 3.6
-    f = float(rng.uniform(0.15, 0.4))
+    f = float(rng.uniform(0.2, 0.4))
     omega = 2 * np.pi * f
-    ay = min(float(rng.uniform(1.0, 4.0)), omega**2 * 1.0)
+    ay = min(float(rng.uniform(1.0, 4.0)), omega**2 * 0.7)
     delta = wheelbase * ay / v**2
     t = np.arange(0.0, duration_s + 1e-9, 0.05)
-    series = [[round(float(a), 3), float(delta * np.cos(omega * a))] for a in t]
+    # sine, its amplitude raised over the first two periods: the heading then swings about zero
+    # instead of keeping the offset an abrupt start leaves (the lane stays where it started)
+    envelope = np.clip(t * f / 2.0, 0.0, 1.0)
+    angle = delta * envelope * np.sin(omega * t)
+    series = [[round(float(a), 3), float(d)] for a, d in zip(t, angle, strict=True)]
     return series, ay / omega**2, ay
 
 
@@ -255,7 +260,7 @@ def _nominal_long(i: int, duration_s: float, weave_every: int, weave_duration_s:
         v = round(float(rng.uniform(30.0, 130.0)), 2)
         series, swing, ay = _weave_series(rng, v, weave_duration_s)
         data.update(duration_s=weave_duration_s, speed_kmh=v,
-                    steering={"mode": "series", "series": series, "lane_y_m": -swing})  # fmt: skip
+                    steering={"mode": "series", "series": series, "lane_y_m": 0.0})  # fmt: skip
         distance = v / 3.6 * weave_duration_s
         extra = {"speed_kmh": v, "weave": {"lateral_accel_mps2": ay, "swing_m": swing}}
     else:
@@ -312,27 +317,42 @@ def run_key(scenario: Scenario, fingerprint: dict | None = None) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
-def _simulate_one(item: tuple[str, str]) -> tuple[str, float, float]:
+def _failure_marker(path: Path) -> Path:
+    return path.with_name(path.stem + ".failed.json")
+
+
+def _simulate_one(item: tuple[str, str]) -> tuple[str, float, float, str | None]:
     scenario_json, path = item
-    from suvtwin.pipeline.simulator import simulate, write_run
+    from suvtwin.pipeline.simulator import SimulationError, simulate, write_run
 
     scenario = parse_scenario(json.loads(scenario_json))
     started = time.perf_counter()
-    result = simulate(scenario)
+    try:
+        result = simulate(scenario)
+    except SimulationError as error:
+        _failure_marker(Path(path)).write_text(json.dumps({"error": str(error)}))
+        return path, scenario.duration_s, time.perf_counter() - started, str(error)
     write_run(result, path)
-    return path, scenario.duration_s, time.perf_counter() - started
+    return path, scenario.duration_s, time.perf_counter() - started, None
 
 
-def simulate_cached(runs: list[BenchRun], folder: str | Path, *, jobs: int = 2) -> tuple[list[Path], dict]:
+def simulate_cached(
+    runs: list[BenchRun], folder: str | Path, *, jobs: int = 2
+) -> tuple[list[Path | None], dict]:
     """Run files of `runs` in `folder` (``<run_key>.parquet``), simulating only the missing ones.
 
     The key hashes the scenario and the simulator's code and library versions
     (:func:`suvtwin.pipeline.campaign.cache.model_fingerprint`), so a changed simulator never
-    reuses old runs. Simulates in `jobs` processes. Returns the paths (in the order of `runs`) and what the
-    simulation cost: ``simulated`` runs and seconds of driving, ``wall_s`` (whole pool),
-    ``run_wall_s`` (sum over runs of each one's wall time, build and write included), and the
-    speed ``realtime_factor`` (driving s per pool wall s) and ``realtime_factor_per_process``
-    (driving s per run wall s).
+    reuses old runs. Simulates in `jobs` processes. A run whose simulation diverges
+    (:class:`~suvtwin.pipeline.simulator.SimulationError`) leaves ``<run_key>.failed.json`` with
+    the message instead, and is not tried again.
+
+    Returns the paths in the order of `runs` (None for a failed run) and what the simulation
+    cost: ``simulated`` runs and seconds of driving, ``wall_s`` (whole pool), ``run_wall_s``
+    (sum over runs of each one's wall time, build and write included), the speed
+    ``realtime_factor`` (driving s per pool wall s) and ``realtime_factor_per_process``
+    (driving s per run wall s), all over the runs simulated now and successfully; ``failed``
+    maps each failed run's name to its message.
     """
     if not (isinstance(jobs, int) and jobs >= 1):
         raise InputError(f"jobs must be a positive whole number, got {jobs!r}")
@@ -342,7 +362,10 @@ def simulate_cached(runs: list[BenchRun], folder: str | Path, *, jobs: int = 2) 
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     paths = [folder / f"{run_key(r.scenario, fingerprint)}.parquet" for r in runs]
-    todo = sorted({str(p): r for p, r in zip(paths, runs, strict=True) if not p.is_file()}.items())
+    todo = sorted(
+        {str(p): r for p, r in zip(paths, runs, strict=True)
+         if not p.is_file() and not _failure_marker(p).is_file()}.items()
+    )  # fmt: skip
     items = [(json.dumps(r.scenario.model_dump(mode="json")), p) for p, r in todo]
     started = time.perf_counter()
     done = []
@@ -354,8 +377,15 @@ def simulate_cached(runs: list[BenchRun], folder: str | Path, *, jobs: int = 2) 
             with context.Pool(min(jobs, len(items))) as pool:
                 done = list(pool.imap_unordered(_simulate_one, items))
     wall = time.perf_counter() - started
-    sim_s = float(sum(d[1] for d in done))
-    run_s = float(sum(d[2] for d in done))
+    ok = [d for d in done if d[3] is None]
+    sim_s = float(sum(d[1] for d in ok))
+    run_s = float(sum(d[2] for d in ok))
+    failed = {}
+    for i, (run, path) in enumerate(zip(runs, paths, strict=True)):
+        marker = _failure_marker(path)
+        if marker.is_file():
+            failed[run.name] = json.loads(marker.read_text())["error"]
+            paths[i] = None
     cost = {
         "runs": len(runs),
         "simulated": len(done),
@@ -363,8 +393,9 @@ def simulate_cached(runs: list[BenchRun], folder: str | Path, *, jobs: int = 2) 
         "simulated_s": sim_s,
         "wall_s": round(wall, 2),
         "run_wall_s": round(run_s, 2),
-        "realtime_factor": round(sim_s / wall, 2) if done else None,
-        "realtime_factor_per_process": round(sim_s / run_s, 2) if done else None,
+        "realtime_factor": round(sim_s / wall, 2) if ok else None,
+        "realtime_factor_per_process": round(sim_s / run_s, 2) if ok else None,
+        "failed": failed,
     }
     return paths, cost
 
