@@ -146,7 +146,13 @@ def main(argv: list[str] | None = None) -> dict:
     add("--loss", type=float, default=0.20, help="warning set: loss below placard (0.20)")
     add("--weave-every", type=int, default=4, help="nominal_long: every n-th run weaves (0: none)")
     add("--weave-duration", type=float, default=30.0, help="nominal_long: weave run length, s")
-    add("--reset-at", type=float, default=None, help="driver reset at this time, s (no placard)")
+    add(
+        "--reset-at",
+        type=float,
+        default=None,
+        help="driver reset at S s instead of the placard "
+        "(meant for nominal_long: the warning set is low from t = 0)",
+    )
     add("--discard-runs", action="store_true", help="delete run files once monitored")
     add("--simulate-only", action="store_true", help="fill the run cache, run no monitor")
     args = parser.parse_args(argv)

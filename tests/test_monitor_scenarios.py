@@ -143,3 +143,21 @@ def test_cache_simulates_once_and_the_harness_scores_a_stand_in(tmp_path):
     assert abs(errors_at(traces, 10.0)["mean_kpa"]) < 4.0
     out = score_set("drop", traces, [r.info for r in runs])
     assert out["change"]["runs"] == 1 and out["coverage"]["inside"] > 0.8
+
+
+def test_a_diverged_run_is_recorded_and_not_retried(tmp_path, monkeypatch):
+    from suvtwin.pipeline import simulator
+
+    calls = []
+
+    def diverge(scenario, **_):
+        calls.append(scenario.seed)
+        raise simulator.SimulationError("simulation diverged before t = 1.000 s (MuJoCo: bad qacc)")
+
+    monkeypatch.setattr(simulator, "simulate", diverge)
+    runs = scenario_set("low_speed", 1, duration_s=2.0)
+    for _ in range(2):
+        paths, cost = simulate_cached(runs, tmp_path, jobs=1)
+        assert paths == [None] and list(cost["failed"]) == ["low_speed_0000"]
+        assert "diverged" in cost["failed"]["low_speed_0000"] and cost["realtime_factor"] is None
+    assert len(calls) == 1 and list(tmp_path.glob("*.parquet")) == []
