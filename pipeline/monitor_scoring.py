@@ -126,22 +126,26 @@ def _last_update(trace: MonitorTrace, at_s: float) -> int | None:
     return k if k >= 0 else None
 
 
-def errors_at(traces: Sequence[MonitorTrace], at_s: float) -> dict:
-    """Error (estimate − truth, kPa) of the last update at or before `at_s`, over runs × tyres:
+def errors_at(traces: Sequence[MonitorTrace], at_s: float, *, tyre: str | None = None) -> dict:
+    """Error (estimate − truth, kPa) of the last update at or before `at_s`, over runs × tyres
+    (only `tyre`'s, one of fl, fr, rl, rr, if given):
     ``mean_kpa``, ``std_kpa`` (population), ``max_abs_kpa``, ``n`` (finite errors), ``n_missing``
     (runs × tyres without a finite estimate by then or shorter runs) and ``unobservable`` (share
     of the n flagged not observable)."""
+    if tyre is not None and tyre not in CORNERS:
+        raise InputError(f"tyre must be one of {', '.join(CORNERS)}, got {tyre!r}")
+    cols = [CORNERS.index(tyre)] if tyre is not None else list(range(4))
     errors, flags, missing = [], [], 0
     for tr in traces:
         k = _last_update(tr, at_s)
         if k is None or tr.t_s[-1] < at_s:
-            missing += 4
+            missing += len(cols)
             continue
-        e = tr.error[k]
+        e = tr.error[k][cols]
         ok = np.isfinite(e)
         missing += int(np.sum(~ok))
         errors.append(e[ok])
-        flags.append(~tr.observable[k][ok])
+        flags.append(~tr.observable[k][cols][ok])
     e = np.concatenate(errors) if errors else np.zeros(0)
     f = np.concatenate(flags) if flags else np.zeros(0, bool)
     if e.size == 0:
@@ -350,8 +354,8 @@ def score_set(
 ) -> dict:
     """Everything issue 12 asks of a bench set, as one JSON-ready mapping.
 
-    Every set: error at 10 s and 30 s (runs long enough), ±2σ coverage after 2 s; by road
-    class where each run has one class. Then per set (`infos[i]` from
+    Every set: error at 10 s and 30 s (runs long enough; all tyres and each tyre), ±2σ coverage
+    after 2 s; by road class where each run has one class. Then per set (`infos[i]` from
     :class:`suvtwin.pipeline.monitor_scenarios.BenchRun`): ``slow_leak``/``drop``: tracking of
     ``info["change"]``; ``low_speed``: :func:`low_speed_shares`; ``warning``: detection of
     ``info["deflated"]`` within 60 s of driving; ``nominal_long``: false warnings (all runs, and
@@ -363,6 +367,9 @@ def score_set(
     out: dict = {"set": set_name, "runs": len(traces), "simulated_min": minutes}
     out["error_at"] = {f"{at:g}s": errors_at(traces, at) for at in (10.0, 30.0)}
     out["coverage"] = coverage(traces, k=2.0, after_s=2.0)
+    out["error_at_by_tyre"] = {
+        c: {f"{at:g}s": errors_at(traces, at, tyre=c) for at in (10.0, 30.0)} for c in CORNERS
+    }
     classes = [i.get("road_class") for i in infos]
     if all(isinstance(c, str) for c in classes) and traces:
         out["by_class"] = {}

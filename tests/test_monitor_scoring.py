@@ -61,6 +61,11 @@ def test_error_at_a_time_uses_the_last_update_before_it():
     assert out["std_kpa"] == pytest.approx(math.sqrt(8.75))
     assert out["max_abs_kpa"] == pytest.approx(5.0)
     assert (out["n"], out["n_missing"], out["unobservable"]) == (8, 0, 0.5)
+    # one tyre: fl errors +1 (run A) and +5 (run B)
+    assert errors_at([a, b], 10.0, tyre="fl")["mean_kpa"] == pytest.approx(3.0)
+    assert errors_at([a, b], 10.0, tyre="rr")["std_kpa"] == pytest.approx(4.0)  # -3 and +5
+    with pytest.raises(InputError, match="tyre"):
+        errors_at([a], 10.0, tyre="front")
     # runs that end before the time, or have no update yet, count as missing
     assert errors_at([a], 30.0) == {"n": 0, "n_missing": 4}
     assert errors_at([a], 5.0)["n_missing"] == 4
