@@ -179,7 +179,7 @@ def main(argv: list[str] | None = None) -> dict:
             monitor_ok = False
             out["monitor_error"] = f"suvtwin.pipeline.monitoring.monitor_run is not available: {error}"
     batch = max(2 * args.jobs, 2) if args.discard_runs else len(runs)
-    sim_costs, mon_costs, traces, extras, conditions, kept = [], [], [], [], {}, []
+    sim_costs, mon_costs, traces, extras, conditions, scored = [], [], [], [], {}, []
     for start in range(0, len(runs), batch):
         part = runs[start : start + batch]
         label = f"monitor_mujoco: {args.set} runs {start}–{start + len(part) - 1}"
@@ -188,7 +188,6 @@ def main(argv: list[str] | None = None) -> dict:
         sim_costs.append(cost)
         good = [i for i, p in enumerate(paths) if p is not None]  # failed (diverged) runs are left out
         part, paths = [part[i] for i in good], [paths[i] for i in good]
-        kept += part
         for r, p in zip(part, paths, strict=True):
             conditions[r.name] = {
                 **run_conditions(p),
@@ -197,8 +196,10 @@ def main(argv: list[str] | None = None) -> dict:
         if monitor_ok and not args.simulate_only and part:
             print(f"{label}: monitoring", file=sys.stderr)
             t, e, cost = monitor_traces(part, paths, jobs=args.jobs, reset_at_s=args.reset_at)
-            traces += t
-            extras += e
+            ok = [i for i, trace in enumerate(t) if trace is not None]  # the monitor raised on the others
+            traces += [t[i] for i in ok]
+            extras += [e[i] for i in ok]
+            scored += [part[i] for i in ok]
             mon_costs.append(cost)
         if args.discard_runs:
             for p in paths:
@@ -230,10 +231,12 @@ def main(argv: list[str] | None = None) -> dict:
             "realtime_factor": driving / monitor_s if monitor_s else None,
             "updates_per_run_median": float(np.median([e["updates"] for e in extras])),
         }
-        scores = score_set(args.set, traces, [r.info for r in kept])
+    if mon_costs:
+        out.setdefault("monitor", {})["failed"] = {k: v for c in mon_costs for k, v in c["failed"].items()}
+        scores = score_set(args.set, traces, [r.info for r in scored])
         out["targets"] = targets(args.set, scores)
         out["scores"] = scores
-        out["road_level_hat_over_truth_at_end"] = _level_ratio(kept, extras)
+        out["road_level_hat_over_truth_at_end"] = _level_ratio(scored, extras)
     out["conditions"] = _conditions_summary(conditions)
     out = _round(out)
     print(json.dumps(out, indent=1))

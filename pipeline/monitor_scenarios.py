@@ -409,7 +409,10 @@ def _monitor_one(item: tuple) -> tuple:
     if monitor is None:
         from suvtwin.pipeline.monitoring import monitor_run as monitor
     started = time.perf_counter()
-    result = monitor(path, placard_kpa=placard, reset_at_s=reset_at)
+    try:
+        result = monitor(path, placard_kpa=placard, reset_at_s=reset_at)
+    except Exception as error:  # a bench records the run the monitor fails on, and goes on
+        return None, {"error": f"{type(error).__name__}: {error}"}
     wall = time.perf_counter() - started
     names = ["t_s", "speed_mps"] + [f"{c}_pressure_kpa" for c in CORNERS]
     table = pq.read_table(path, columns=names)
@@ -435,10 +438,11 @@ def monitor_traces(
     object whose ``table`` has the columns :func:`suvtwin.pipeline.monitor_scoring.monitor_trace`
     reads; None: :func:`suvtwin.pipeline.monitoring.monitor_run` (imported in the worker). The
     placard is the run's (:attr:`BenchRun.placard_kpa`). Returns the
-    :class:`~suvtwin.pipeline.monitor_scoring.MonitorTrace` of each run, per-run extras
-    (``monitor_wall_s``, ``updates``, the road level and waviness estimates at the end when
-    given) and the cost: driving s, monitor s (summed over runs: file reading included) and
-    their ratio ``realtime_factor``.
+    :class:`~suvtwin.pipeline.monitor_scoring.MonitorTrace` of each run (None where the monitor
+    raised), per-run extras (``monitor_wall_s``, ``updates``, the road level and waviness
+    estimates at the end when given; ``error`` where it raised) and the cost over the runs it
+    finished: driving s, monitor s (summed over runs: file reading included) and their ratio
+    ``realtime_factor``; ``failed`` maps each run it raised on to the exception.
     """
     if len(runs) != len(paths):
         raise InputError(f"monitor_traces: {len(runs)} runs but {len(paths)} paths")
@@ -453,12 +457,13 @@ def monitor_traces(
     wall = time.perf_counter() - started
     traces = [d[0] for d in done]
     extras = [d[1] for d in done]
-    driving = float(sum(r.scenario.duration_s for r in runs))
-    monitor_s = float(sum(e["monitor_wall_s"] for e in extras))
+    driving = float(sum(r.scenario.duration_s for r, t in zip(runs, traces, strict=True) if t is not None))
+    monitor_s = float(sum(e.get("monitor_wall_s", 0.0) for e in extras))
     cost = {
         "driving_s": driving,
         "monitor_s": round(monitor_s, 3),
         "wall_s": round(wall, 2),
         "realtime_factor": round(driving / monitor_s, 1) if monitor_s > 0 else None,
+        "failed": {r.name: e["error"] for r, e in zip(runs, extras, strict=True) if "error" in e},
     }
     return traces, extras, cost

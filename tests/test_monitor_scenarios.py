@@ -144,6 +144,12 @@ def test_cache_simulates_once_and_the_harness_scores_a_stand_in(tmp_path):
     out = score_set("drop", traces, [r.info for r in runs])
     assert out["change"]["runs"] == 1 and out["coverage"]["inside"] > 0.8
 
+    def broken(path, **_):
+        raise ValueError("no estimate")
+
+    traces, extras, cost = monitor_traces(runs, paths, monitor=broken, jobs=1)
+    assert traces == [None] and cost["failed"] == {"drop_0000": "ValueError: no estimate"}
+
 
 def test_a_diverged_run_is_recorded_and_not_retried(tmp_path, monkeypatch):
     from suvtwin.pipeline import simulator
