@@ -10,7 +10,7 @@ plus what a scorer needs to know about it). Every draw of run `i` of a set comes
 seed ``SEED_BASE + 10000·set index + i`` only, so a bigger set with the same seed base holds
 the smaller one's runs, and no seed coincides with the small seeds the tests use. Road levels
 are drawn log-uniformly across their ISO 8608 class band
-(:func:`suvtwin.roads.iso8608.draw_level_in_class`), never at the class centre.
+(:func:`suvtwin.roads.iso8608.draw_level_in_class`), not fixed at the class centre.
 
 The sets (what issue 12 asks the monitor to be scored on):
 
@@ -27,8 +27,9 @@ The sets (what issue 12 asks the monitor to be scored on):
   kept in its lane (straight); every `weave_every`-th run is a shorter open-loop weave (steering
   series, lateral acceleration up to ~4 m/s²) instead. The simulator has no curved road (its
   road is a straight 4 m wide strip, lane mode holds a straight line and open-loop steering drifts
-  on rough roads: measured 27 m in 120 s at 100 km/h on class D with zero steer), so the weave
-  runs are short and the bench reports how far they left the lane.
+  on rough roads: measured 27 m in 120 s at 100 km/h on class D with zero steer, and a 30 s
+  weave on class D at 66 km/h reached 4.7 m), so the weave runs are short and the bench reports
+  how far they left the lane.
 
 Loads: a total mass drawn uniformly in 0–300 kg split (flat Dirichlet) over one to three of
 the places where a SUV carries it (front passenger seat, rear seats, boot), positions from the
