@@ -1,0 +1,249 @@
+"""The four-corner tyre-pressure monitor (issue 12) on MuJoCo ground truth, one scenario set at a time.
+
+Run: ``python bench/monitor_mujoco.py --set constant --runs 100 [--jobs 2]`` — prints JSON.
+Sets (:mod:`suvtwin.pipeline.monitor_scenarios`): ``constant``, ``slow_leak``, ``drop``,
+``low_speed``, ``warning``, ``nominal_long``; every road level drawn anywhere in its class
+band, seeds from 900000 on (none a test uses). Default 4 runs per set (the issue asks for
+≥ 100 for ``constant`` and ``warning``, and ≥ 500 simulated minutes for ``nominal_long``:
+``--runs 130``, 98 lane-kept runs of 300 s and 32 weaves of 30 s).
+
+The runs are simulated in ``--jobs`` processes into ``--runs-dir`` (default
+``bench/_runs/<set>/``, one Parquet file per run named by the hash of its scenario and the
+simulator's code, so a second call reuses them); ``--discard-runs`` deletes each batch's files
+once monitored (a run takes ~0.8 MB per simulated second). The monitor
+(:func:`suvtwin.pipeline.monitoring.monitor_run`) gets each run file and, for the ``warning``
+and ``nominal_long`` sets, the run's placard pressure (``--reset-at S``: a driver reset at S s
+instead). Scored (:func:`suvtwin.pipeline.monitor_scoring.score_set`) against the run's true
+pressures, beside the issue's targets; also the simulation and monitor throughput (driving s
+per wall s; the monitor's includes reading the file and, on its first run per process, JIT
+compilation), runs whose simulation diverged (left out of the scores), and what the car went
+through: runs that left their lane or lost wheel contact, and how far the weave runs of
+``nominal_long`` swung.
+``--simulate-only`` fills the cache without a monitor.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from suvtwin.pipeline.monitor_scenarios import SETS, monitor_traces, scenario_set, simulate_cached
+from suvtwin.pipeline.monitor_scoring import score_set
+
+ISSUE_SIZE = {"constant": 100, "slow_leak": 20, "drop": 20, "low_speed": 20, "warning": 100,
+              "nominal_long": 130}  # fmt: skip
+"""Runs the issue asks for (``constant``, ``warning``: ≥ 100; ``nominal_long``: ≥ 500 simulated min, which
+130 runs give: 98 of 300 s and 32 weaves of 30 s); the change and low-speed sets have no stated size."""
+HEIGHTFIELD_HALF_WIDTH_M = 2.0  # suvtwin.mjcf.builder.HALF_WIDTH_Y: the road strip is 4 m wide
+
+
+def _target(value, op: str, bound: float) -> dict:
+    met = value is not None and bool(value <= bound if op == "<=" else value >= bound)
+    return {"value": value, "target": f"{op} {bound:g}", "met": met}
+
+
+def targets(set_name: str, scores: dict) -> dict:
+    """The issue's 'done when' numbers for this set, with the measured value and whether it is met."""
+    e10, e30 = scores["error_at"]["10s"], scores["error_at"]["30s"]
+    cov = scores["coverage"]["inside"]
+    out = {}
+    if set_name == "constant":
+        out["abs_mean_error_10s_kpa"] = _target(abs(e10["mean_kpa"]) if e10.get("n") else None, "<=", 3.0)
+        out["error_std_10s_kpa"] = _target(e10.get("std_kpa"), "<=", 10.0)
+        out["error_std_30s_kpa"] = _target(e30.get("std_kpa"), "<=", 6.0)
+        out["inside_2sigma_after_2s"] = _target(cov, ">=", 0.90)
+        out["runs"] = _target(scores["runs"], ">=", 100)
+    elif set_name in ("slow_leak", "drop"):
+        ch = scores["change"]
+        out["settle_s_max"] = _target(ch["settle_s_max"], "<=", 15.0)
+        out["inside_2sigma_during_and_after"] = _target(ch["inside_2sigma_during_and_after"], ">=", 0.85)
+    elif set_name == "low_speed":
+        ls = scores["low_speed"]
+        out["observable_and_outside_accuracy"] = _target(ls.get("wrong"), "<=", 0.0)
+        out["outside_3sigma"] = _target(ls.get("outside_3sigma"), "<=", 0.0)
+    elif set_name == "warning":
+        out["detected_within_60s"] = _target(scores["warning"]["detected"], ">=", 0.95)
+        out["runs"] = _target(scores["runs"], ">=", 100)
+    elif set_name == "nominal_long":
+        fw = scores["false_warnings"]
+        out["false_warnings"] = _target(fw["false_warnings"], "<=", 0)
+        out["simulated_min"] = _target(round(fw["simulated_min"], 1), ">=", 500.0)
+    return out
+
+
+def run_conditions(path: Path) -> dict:
+    """What the car went through in a run: max |y| of the chassis from the lane's line (m), the
+    share of samples with a wheel beyond the 4 m road strip (there the road is the strip's edge
+    row, extended) and the share with a wheel off the ground (tyre load ≤ 1 N)."""
+    import pyarrow.parquet as pq
+
+    from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
+
+    columns = ["y_m"] + [f"{c}_tire_fz_n" for c in CORNERS]
+    table = pq.read_table(path, columns=columns)
+    y = table["y_m"].to_numpy()
+    fz = np.stack([table[f"{c}_tire_fz_n"].to_numpy() for c in CORNERS], axis=1)
+    chassis = load_vehicle().chassis
+    half_track = 0.5 * max(chassis.track_front, chassis.track_rear)
+    return {
+        "max_abs_y_m": float(np.abs(y).max()),
+        "share_off_strip": float(np.mean(np.abs(y) + half_track > HEIGHTFIELD_HALF_WIDTH_M)),
+        "share_wheel_airborne": float(np.mean(np.any(fz <= 1.0, axis=1))),
+    }
+
+
+def _conditions_summary(conditions: dict) -> dict:
+    """Runs that left their lane (|y| > 1 m; lane-kept runs only) or lost wheel contact (> 1 % of
+    samples), and the weave runs' lateral swing next to how far they went."""
+    lane = {n: c for n, c in conditions.items() if not c.get("weave")}
+    airborne = np.array([c["share_wheel_airborne"] for c in conditions.values()])
+    return {
+        "max_abs_y_m_lane_kept": max((c["max_abs_y_m"] for c in lane.values()), default=None),
+        "left_lane_over_1m": {n: c["max_abs_y_m"] for n, c in lane.items() if c["max_abs_y_m"] > 1.0},
+        "share_wheel_airborne_median": float(np.median(airborne)) if airborne.size else None,
+        "share_wheel_airborne_max": float(airborne.max()) if airborne.size else None,
+        "runs_wheel_airborne_over_1pct": {
+            n: c["share_wheel_airborne"] for n, c in conditions.items() if c["share_wheel_airborne"] > 0.01
+        },
+        "weaves": {n: c for n, c in conditions.items() if c.get("weave")},
+    }
+
+
+def _level_ratio(runs, extras) -> dict | None:
+    ratio = [
+        e["road_level_hat_m3_at_end"] / r.info["gd_n0_m3"]
+        for r, e in zip(runs, extras, strict=True)
+        if isinstance(r.info.get("gd_n0_m3"), float) and "road_level_hat_m3_at_end" in e
+    ]
+    if not ratio:
+        return None
+    q = np.percentile(ratio, [10, 50, 90])
+    return {"runs": len(ratio), "p10": float(q[0]), "median": float(q[1]), "p90": float(q[2])}
+
+
+def _round(obj, digits: int = 4):
+    if isinstance(obj, float):  # inf (e.g. a settle time never reached) and NaN print as null
+        return float(f"{obj:.{digits}g}") if np.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: _round(v, digits) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_round(v, digits) for v in obj]
+    return obj
+
+
+def main(argv: list[str] | None = None) -> dict:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    add = parser.add_argument
+    add("--set", default="constant", choices=SETS)
+    add("--runs", type=int, default=4, help="runs of the set (default 4)")
+    add("--duration", type=float, default=None, help="run length, s (default: the set's)")
+    add("--jobs", type=int, default=2, help="processes (default 2)")
+    add("--runs-dir", type=Path, default=None, help="run cache (default bench/_runs/<set>)")
+    add("--loss", type=float, default=0.20, help="warning set: loss below placard (0.20)")
+    add("--weave-every", type=int, default=4, help="nominal_long: every n-th run weaves (0: none)")
+    add("--weave-duration", type=float, default=30.0, help="nominal_long: weave run length, s")
+    add(
+        "--reset-at",
+        type=float,
+        default=None,
+        help="driver reset at S s instead of the placard "
+        "(meant for nominal_long: the warning set is low from t = 0)",
+    )
+    add("--discard-runs", action="store_true", help="delete run files once monitored")
+    add("--simulate-only", action="store_true", help="fill the run cache, run no monitor")
+    args = parser.parse_args(argv)
+
+    runs = scenario_set(args.set, args.runs, duration_s=args.duration, loss=args.loss,
+                        weave_every=args.weave_every, weave_duration_s=args.weave_duration)  # fmt: skip
+    if args.reset_at is not None:
+        for r in runs:
+            r.info.pop("placard_kpa", None)
+    folder = args.runs_dir or Path(__file__).resolve().parent / "_runs" / args.set
+    out: dict = {
+        "bench": "monitor_mujoco",
+        "set": args.set,
+        "runs": len(runs),
+        "issue_size": ISSUE_SIZE[args.set],
+        "simulated_min": sum(r.scenario.duration_s for r in runs) / 60.0,
+        "options": {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items()},
+    }
+    monitor_ok = True
+    if not args.simulate_only:
+        try:
+            from suvtwin.pipeline.monitoring import monitor_run  # noqa: F401
+        except ImportError as error:
+            monitor_ok = False
+            out["monitor_error"] = f"suvtwin.pipeline.monitoring.monitor_run is not available: {error}"
+    batch = max(2 * args.jobs, 2) if args.discard_runs else len(runs)
+    sim_costs, mon_costs, traces, extras, conditions, scored = [], [], [], [], {}, []
+    for start in range(0, len(runs), batch):
+        part = runs[start : start + batch]
+        label = f"monitor_mujoco: {args.set} runs {start}–{start + len(part) - 1}"
+        print(f"{label}: simulating", file=sys.stderr)
+        paths, cost = simulate_cached(part, folder, jobs=args.jobs)
+        sim_costs.append(cost)
+        good = [i for i, p in enumerate(paths) if p is not None]  # failed (diverged) runs are left out
+        part, paths = [part[i] for i in good], [paths[i] for i in good]
+        for r, p in zip(part, paths, strict=True):
+            conditions[r.name] = {
+                **run_conditions(p),
+                **({"weave": r.info["weave"]} if r.info.get("weave") else {}),
+            }
+        if monitor_ok and not args.simulate_only and part:
+            print(f"{label}: monitoring", file=sys.stderr)
+            t, e, cost = monitor_traces(part, paths, jobs=args.jobs, reset_at_s=args.reset_at)
+            ok = [i for i, trace in enumerate(t) if trace is not None]  # the monitor raised on the others
+            traces += [t[i] for i in ok]
+            extras += [e[i] for i in ok]
+            scored += [part[i] for i in ok]
+            mon_costs.append(cost)
+        if args.discard_runs:
+            for p in paths:
+                p.unlink(missing_ok=True)
+    sim_s = sum(c["simulated_s"] for c in sim_costs)
+    wall = sum(c["wall_s"] for c in sim_costs)
+    run_wall = sum(c["run_wall_s"] for c in sim_costs)
+    size = sum(p.stat().st_size for p in folder.glob("*.parquet")) if folder.is_dir() else 0
+    files = len(list(folder.glob("*.parquet"))) if folder.is_dir() else 0
+    out["simulation"] = {
+        "runs_dir": str(folder),
+        "simulated": sum(c["simulated"] for c in sim_costs),
+        "reused": sum(c["reused"] for c in sim_costs),
+        "failed": {k: v for c in sim_costs for k, v in c["failed"].items()},
+        "simulated_s": sim_s,
+        "wall_s": wall,
+        "jobs": args.jobs,
+        "realtime_factor": sim_s / wall if sim_s else None,
+        "realtime_factor_per_process": sim_s / run_wall if sim_s else None,
+        "cache_files": files,
+        "cache_mb": size / 1e6,
+    }
+    if traces:
+        driving = sum(c["driving_s"] for c in mon_costs)
+        monitor_s = sum(c["monitor_s"] for c in mon_costs)
+        out["monitor"] = {
+            "driving_s": driving,
+            "monitor_s": monitor_s,
+            "realtime_factor": driving / monitor_s if monitor_s else None,
+            "updates_per_run_median": float(np.median([e["updates"] for e in extras])),
+        }
+    if mon_costs:
+        out.setdefault("monitor", {})["failed"] = {k: v for c in mon_costs for k, v in c["failed"].items()}
+        scores = score_set(args.set, traces, [r.info for r in scored])
+        out["targets"] = targets(args.set, scores)
+        out["scores"] = scores
+        out["road_level_hat_over_truth_at_end"] = _level_ratio(scored, extras)
+    out["conditions"] = _conditions_summary(conditions)
+    out = _round(out)
+    print(json.dumps(out, indent=1))
+    if not monitor_ok:
+        sys.exit(2)
+    return out
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,394 @@
+"""Scores of a four-corner tyre-pressure monitor against the ground truth of its runs.
+
+Usual call: ``trace = monitor_trace(run_table, result.table)``; ``errors_at([trace, ...], 10.0)``.
+
+A :class:`MonitorTrace` holds one run: the true pressure per tyre on the run's time axis and the
+monitor's output on its own update times. The truth belonging to an update at ``t_est`` is the
+run's truth at the last sample at or before ``t_est`` (the monitor cannot know a later one).
+The estimate at a time ``t`` is the last update at or before ``t``. Pressures in kPa, times in s;
+tyres in the order fl, fr, rl, rr. Pure numpy; NaN estimates or σ count as misses, never as hits.
+
+The criteria are those of issue 12 (UN R141 and FMVSS 138 for the warnings): error mean and
+std at given times, ±kσ coverage, the time a changed pressure takes to be tracked within a
+tolerance after the change ends, the share of low-speed samples that are within the accuracy,
+flagged not observable or outside ±3σ, and warnings (detected within a window of driving;
+false warnings per simulated minute).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from suvtwin.errors import InputError
+from suvtwin.mjcf.vehicle import CORNERS
+
+__all__ = [
+    "MonitorTrace",
+    "change_tracking",
+    "coverage",
+    "driving_time",
+    "errors_at",
+    "false_warnings",
+    "low_speed_shares",
+    "monitor_trace",
+    "score_set",
+    "settle_time",
+    "truth_at",
+    "warning_detection",
+    "warning_times",
+]
+
+
+@dataclass(frozen=True)
+class MonitorTrace:
+    """One run seen by a monitor (kPa, s, tyres fl, fr, rl, rr).
+
+    Attributes
+    ----------
+    t_s : (T,) run time axis; truth_kpa : (T, 4) true pressures; speed_mps : (T,) vehicle speed.
+    t_est : (K,) monitor update times; p_hat, sigma : (K, 4) estimate and its 1σ;
+    observable, warning : (K, 4) bool flags (warning latched or not).
+    """
+
+    t_s: np.ndarray
+    truth_kpa: np.ndarray
+    speed_mps: np.ndarray
+    t_est: np.ndarray
+    p_hat: np.ndarray
+    sigma: np.ndarray
+    observable: np.ndarray
+    warning: np.ndarray
+
+    def __post_init__(self) -> None:
+        T, K = np.shape(self.t_s)[0], np.shape(self.t_est)[0]
+        for name, shape in (("truth_kpa", (T, 4)), ("speed_mps", (T,)), ("p_hat", (K, 4)),
+                            ("sigma", (K, 4)), ("observable", (K, 4)), ("warning", (K, 4))):  # fmt: skip
+            got = np.shape(getattr(self, name))
+            if got != shape:
+                raise InputError(f"MonitorTrace.{name} must have shape {shape}, got {got}")
+        if T == 0 or np.any(np.diff(self.t_s) <= 0) or np.any(np.diff(self.t_est) < 0):
+            raise InputError("MonitorTrace: t_s must be non-empty and increasing, t_est non-decreasing")
+
+    @property
+    def duration_s(self) -> float:
+        """Length of the run, s."""
+        return float(self.t_s[-1] - self.t_s[0])
+
+    @property
+    def truth_at_est(self) -> np.ndarray:
+        """True pressure at each update, (K, 4), kPa."""
+        return truth_at(self.t_s, self.truth_kpa, self.t_est)
+
+    @property
+    def error(self) -> np.ndarray:
+        """Estimate minus truth at each update, (K, 4), kPa."""
+        return self.p_hat - self.truth_at_est
+
+
+def monitor_trace(run: Mapping, monitor: Mapping) -> MonitorTrace:
+    """A :class:`MonitorTrace` from a run's table (``t_s``, ``speed_mps``, ``{c}_pressure_kpa``) and a
+    monitor's table (``t_s``, ``{c}_pressure_hat_kpa``, ``{c}_pressure_sigma_kpa``,
+    ``{c}_observable``, ``{c}_warning``): DataFrames or mappings of arrays."""
+
+    def col(table: Mapping, name: str, what: str) -> np.ndarray:
+        try:
+            return np.asarray(table[name])
+        except KeyError:
+            raise InputError(f"{what} table has no column {name!r}") from None
+
+    def per_tyre(table: Mapping, suffix: str, what: str, dtype=float) -> np.ndarray:
+        return np.stack([col(table, f"{c}_{suffix}", what) for c in CORNERS], axis=1).astype(dtype)
+
+    return MonitorTrace(
+        t_s=col(run, "t_s", "run").astype(float),
+        truth_kpa=per_tyre(run, "pressure_kpa", "run"),
+        speed_mps=col(run, "speed_mps", "run").astype(float),
+        t_est=col(monitor, "t_s", "monitor").astype(float),
+        p_hat=per_tyre(monitor, "pressure_hat_kpa", "monitor"),
+        sigma=per_tyre(monitor, "pressure_sigma_kpa", "monitor"),
+        observable=per_tyre(monitor, "observable", "monitor", bool),
+        warning=per_tyre(monitor, "warning", "monitor", bool),
+    )
+
+
+def truth_at(t_s: np.ndarray, truth: np.ndarray, t_est: np.ndarray) -> np.ndarray:
+    """`truth` (rows on `t_s`) at the last sample at or before each of `t_est` (the first sample
+    for times before the run's start)."""
+    idx = np.searchsorted(t_s, t_est, side="right") - 1
+    return np.asarray(truth)[np.clip(idx, 0, len(t_s) - 1)]
+
+
+def _last_update(trace: MonitorTrace, at_s: float) -> int | None:
+    k = int(np.searchsorted(trace.t_est, at_s, side="right")) - 1
+    return k if k >= 0 else None
+
+
+def errors_at(traces: Sequence[MonitorTrace], at_s: float, *, tyre: str | None = None) -> dict:
+    """Error (estimate − truth, kPa) of the last update at or before `at_s`, over runs × tyres
+    (only `tyre`'s, one of fl, fr, rl, rr, if given):
+    ``mean_kpa``, ``std_kpa`` (population), ``max_abs_kpa``, ``n`` (finite errors), ``n_missing``
+    (runs × tyres without a finite estimate by then or shorter runs) and ``unobservable`` (share
+    of the n flagged not observable)."""
+    if tyre is not None and tyre not in CORNERS:
+        raise InputError(f"tyre must be one of {', '.join(CORNERS)}, got {tyre!r}")
+    cols = [CORNERS.index(tyre)] if tyre is not None else list(range(4))
+    errors, flags, missing = [], [], 0
+    for tr in traces:
+        k = _last_update(tr, at_s)
+        if k is None or tr.t_s[-1] < at_s:
+            missing += len(cols)
+            continue
+        e = tr.error[k][cols]
+        ok = np.isfinite(e)
+        missing += int(np.sum(~ok))
+        errors.append(e[ok])
+        flags.append(~tr.observable[k][cols][ok])
+    e = np.concatenate(errors) if errors else np.zeros(0)
+    f = np.concatenate(flags) if flags else np.zeros(0, bool)
+    if e.size == 0:
+        return {"n": 0, "n_missing": missing}
+    return {
+        "mean_kpa": float(e.mean()),
+        "std_kpa": float(e.std()),
+        "max_abs_kpa": float(np.abs(e).max()),
+        "n": int(e.size),
+        "n_missing": missing,
+        "unobservable": float(f.mean()),
+    }
+
+
+def _inside(err: np.ndarray, sigma: np.ndarray, k: float) -> np.ndarray:
+    with np.errstate(invalid="ignore"):
+        return np.isfinite(err) & np.isfinite(sigma) & (np.abs(err) <= k * sigma)
+
+
+def coverage(traces: Sequence[MonitorTrace], *, k: float = 2.0, after_s: float = 2.0) -> dict:
+    """Share of updates at or after `after_s` (runs × tyres) whose error is inside ±`k`σ;
+    also the share among updates flagged observable."""
+    inside, observable = [], []
+    for tr in traces:
+        m = tr.t_est >= after_s
+        inside.append(_inside(tr.error[m], tr.sigma[m], k).ravel())
+        observable.append(tr.observable[m].ravel())
+    hit = np.concatenate(inside) if inside else np.zeros(0, bool)
+    obs = np.concatenate(observable) if observable else np.zeros(0, bool)
+    return {
+        "k_sigma": k,
+        "after_s": after_s,
+        "inside": float(hit.mean()) if hit.size else None,
+        "inside_observable": float(hit[obs].mean()) if obs.any() else None,
+        "n": int(hit.size),
+    }
+
+
+def settle_time(t_est: np.ndarray, error: np.ndarray, end_s: float, *, tol_kpa: float = 12.5) -> float:
+    """Time after `end_s` (s) from which `error` (kPa, on `t_est`) stays within ±`tol_kpa` to the
+    end of the record: 0 if it never leaves after `end_s`, inf if it is outside at the last
+    update (or there is none after `end_s`)."""
+    m = t_est >= end_s
+    t, e = t_est[m], error[m]
+    if t.size == 0:
+        return float("inf")
+    with np.errstate(invalid="ignore"):
+        bad = ~(np.abs(e) <= tol_kpa)
+    if bad[-1]:
+        return float("inf")
+    if not bad.any():
+        return 0.0
+    last_bad = int(np.flatnonzero(bad)[-1])
+    return float(t[last_bad + 1] - end_s)
+
+
+def change_tracking(
+    traces: Sequence[MonitorTrace],
+    changes: Sequence[Mapping],
+    *,
+    tol_kpa: float = 12.5,
+    within_s: float = 15.0,
+    k: float = 2.0,
+) -> dict:
+    """Tracking of one changed tyre per run (`changes[i]` = {"tire", "start_s", "end_s"}):
+    settle times after the change ends (:func:`settle_time`; median, 90th percentile, max and the
+    share ≤ `within_s`), and ±`k`σ coverage of that tyre's updates from the change's start on
+    (during and after) and during it only; the other tyres' coverage over the same span."""
+    if len(traces) != len(changes):
+        raise InputError(f"change_tracking: {len(traces)} traces but {len(changes)} changes")
+    settle, during_after, during, others = [], [], [], []
+    for tr, ch in zip(traces, changes, strict=True):
+        i = CORNERS.index(ch["tire"])
+        err = tr.error
+        settle.append(settle_time(tr.t_est, err[:, i], ch["end_s"], tol_kpa=tol_kpa))
+        m = tr.t_est >= ch["start_s"]
+        during_after.append(_inside(err[m, i], tr.sigma[m, i], k))
+        md = m & (tr.t_est <= ch["end_s"])
+        during.append(_inside(err[md, i], tr.sigma[md, i], k))
+        rest = [j for j in range(4) if j != i]
+        others.append(_inside(err[m][:, rest], tr.sigma[m][:, rest], k).ravel())
+    s = np.array(settle)
+
+    def share(parts: list) -> float | None:
+        x = np.concatenate(parts) if parts else np.zeros(0, bool)
+        return float(x.mean()) if x.size else None
+
+    finite = s[np.isfinite(s)]
+    return {
+        "tol_kpa": tol_kpa,
+        "settle_s_median": float(np.median(s)) if s.size else None,
+        "settle_s_p90": float(np.percentile(s, 90)) if s.size else None,
+        "settle_s_max": float(s.max()) if s.size else None,
+        "never_settled": int(np.sum(~np.isfinite(s))),
+        "settled_within": within_s,
+        "share_settled_within": float(np.mean(s <= within_s)) if s.size else None,
+        "settle_s_finite_max": float(finite.max()) if finite.size else None,
+        f"inside_{k:g}sigma_during_and_after": share(during_after),
+        f"inside_{k:g}sigma_during": share(during),
+        f"inside_{k:g}sigma_other_tyres": share(others),
+        "runs": int(s.size),
+    }
+
+
+def low_speed_shares(traces: Sequence[MonitorTrace], *, tol_kpa: float = 12.5, after_s: float = 2.0) -> dict:
+    """Shares of updates at or after `after_s` (runs × tyres) that are observable and within
+    ±`tol_kpa` (``accurate``), flagged not observable (``flagged``), observable and outside the
+    tolerance (``wrong``); and those outside ±3σ, all and among the observable ones. The issue's
+    criterion: accurate + flagged = 1 and no update outside ±3σ."""
+    err, sig, obs = [], [], []
+    for tr in traces:
+        m = tr.t_est >= after_s
+        err.append(tr.error[m].ravel())
+        sig.append(tr.sigma[m].ravel())
+        obs.append(tr.observable[m].ravel())
+    e = np.concatenate(err) if err else np.zeros(0)
+    s = np.concatenate(sig) if sig else np.zeros(0)
+    o = np.concatenate(obs) if obs else np.zeros(0, bool)
+    if e.size == 0:
+        return {"n": 0}
+    with np.errstate(invalid="ignore"):
+        close = np.abs(e) <= tol_kpa
+    outside3 = ~_inside(e, s, 3.0)
+    return {
+        "tol_kpa": tol_kpa,
+        "accurate": float(np.mean(o & close)),
+        "flagged": float(np.mean(~o)),
+        "wrong": float(np.mean(o & ~close)),
+        "outside_3sigma": float(np.mean(outside3)),
+        "outside_3sigma_observable": float(np.mean(outside3[o])) if o.any() else None,
+        "n": int(e.size),
+    }
+
+
+def warning_times(t_est: np.ndarray, warning: np.ndarray) -> np.ndarray:
+    """First update time at which each tyre's warning is on, (4,) s; NaN: never."""
+    w = np.asarray(warning, bool)
+    first = np.argmax(w, axis=0)
+    return np.where(w.any(axis=0), np.asarray(t_est, float)[first], np.nan)
+
+
+def driving_time(t_s: np.ndarray, speed_mps: np.ndarray, at_s: float, *, min_speed_mps: float = 1.0) -> float:
+    """Time spent driving (speed ≥ `min_speed_mps`) from the run's start up to `at_s`, s
+    (rectangle rule on the run's samples)."""
+    dt = np.diff(t_s, append=t_s[-1] + (t_s[-1] - t_s[-2] if len(t_s) > 1 else 0.0))
+    m = (t_s < at_s) & (np.asarray(speed_mps) >= min_speed_mps)
+    return float(np.sum(dt[m]))
+
+
+def _rising_edges(warning: np.ndarray) -> np.ndarray:
+    w = np.asarray(warning, bool)
+    return np.sum(w & ~np.vstack([np.zeros((1, w.shape[1]), bool), w[:-1]]), axis=0)
+
+
+def warning_detection(
+    traces: Sequence[MonitorTrace], deflated: Sequence[Sequence[str]], *, window_s: float = 60.0
+) -> dict:
+    """Deflation warnings on runs whose tyres `deflated[i]` are low from the start: a run is
+    detected when every deflated tyre warns within `window_s` of driving (:func:`driving_time`).
+    Reported overall and for one-tyre and all-four runs, with the driving time to the last needed
+    warning (median, max over detected runs) and warnings on tyres that are not deflated."""
+    if len(traces) != len(deflated):
+        raise InputError(f"warning_detection: {len(traces)} traces but {len(deflated)} deflated lists")
+    hit, kind, delay, wrong = [], [], [], 0
+    for tr, low in zip(traces, deflated, strict=True):
+        times = warning_times(tr.t_est, tr.warning)
+        idx = [CORNERS.index(c) for c in low]
+        needed = times[idx]
+        if np.all(np.isfinite(needed)):
+            d = driving_time(tr.t_s, tr.speed_mps, float(needed.max()))
+            ok = d <= window_s
+        else:
+            d, ok = float("inf"), False
+        hit.append(ok)
+        delay.append(d)
+        kind.append("all_four" if len(idx) == 4 else "one_tyre")
+        wrong += int(np.sum(np.isfinite(np.delete(times, idx))))
+    hit_a, kind_a, delay_a = np.array(hit), np.array(kind), np.array(delay)
+    out = {"window_s": window_s, "runs": len(hit), "detected": float(hit_a.mean()) if hit else None}
+    for name in ("one_tyre", "all_four"):
+        m = kind_a == name
+        out[name] = {"runs": int(m.sum()), "detected": float(hit_a[m].mean()) if m.any() else None}
+    found = delay_a[hit_a]
+    out["time_to_warn_s_median"] = float(np.median(found)) if found.size else None
+    out["time_to_warn_s_max"] = float(found.max()) if found.size else None
+    out["warnings_on_inflated_tyres"] = wrong
+    return out
+
+
+def false_warnings(traces: Sequence[MonitorTrace]) -> dict:
+    """Warnings on runs at nominal pressure (each is false): number of warning onsets (rising
+    edges per tyre), the runs with any, the simulated minutes and onsets per simulated minute."""
+    onsets = np.array([int(_rising_edges(tr.warning).sum()) for tr in traces])
+    minutes = float(sum(tr.duration_s for tr in traces) / 60.0)
+    return {
+        "false_warnings": int(onsets.sum()),
+        "runs_with_false_warning": int(np.sum(onsets > 0)),
+        "runs": len(traces),
+        "simulated_min": minutes,
+        "per_simulated_min": float(onsets.sum() / minutes) if minutes > 0 else None,
+    }
+
+
+def score_set(
+    set_name: str, traces: Sequence[MonitorTrace], infos: Sequence[Mapping], *, tol_kpa: float = 12.5
+) -> dict:
+    """Everything issue 12 asks of a bench set, as one JSON-ready mapping.
+
+    Every set: error at 10 s and 30 s (runs long enough; all tyres and each tyre), ±2σ coverage
+    after 2 s; by road class where each run has one class. Then per set (`infos[i]` from
+    :class:`suvtwin.pipeline.monitor_scenarios.BenchRun`): ``slow_leak``/``drop``: tracking of
+    ``info["change"]``; ``low_speed``: :func:`low_speed_shares`; ``warning``: detection of
+    ``info["deflated"]`` within 60 s of driving; ``nominal_long``: false warnings (all runs, and
+    the lane-kept and weave runs apart).
+    """
+    if len(traces) != len(infos):
+        raise InputError(f"score_set: {len(traces)} traces but {len(infos)} infos")
+    minutes = sum(t.duration_s for t in traces) / 60.0
+    out: dict = {"set": set_name, "runs": len(traces), "simulated_min": minutes}
+    out["error_at"] = {f"{at:g}s": errors_at(traces, at) for at in (10.0, 30.0)}
+    out["coverage"] = coverage(traces, k=2.0, after_s=2.0)
+    out["error_at_by_tyre"] = {
+        c: {f"{at:g}s": errors_at(traces, at, tyre=c) for at in (10.0, 30.0)} for c in CORNERS
+    }
+    classes = [i.get("road_class") for i in infos]
+    if all(isinstance(c, str) for c in classes) and traces:
+        out["by_class"] = {}
+        for c in sorted(set(classes)):
+            sub = [t for t, k in zip(traces, classes, strict=True) if k == c]
+            out["by_class"][c] = {
+                "runs": len(sub),
+                "error_at": {f"{at:g}s": errors_at(sub, at) for at in (10.0, 30.0)},
+                "coverage": coverage(sub, k=2.0, after_s=2.0)["inside"],
+            }
+    if set_name in ("slow_leak", "drop"):
+        out["change"] = change_tracking(traces, [i["change"] for i in infos], tol_kpa=tol_kpa)
+    elif set_name == "low_speed":
+        out["low_speed"] = low_speed_shares(traces, tol_kpa=tol_kpa)
+    elif set_name == "warning":
+        out["warning"] = warning_detection(traces, [i["deflated"] for i in infos], window_s=60.0)
+    elif set_name == "nominal_long":
+        weave = np.array([bool(i.get("weave")) for i in infos])
+        out["false_warnings"] = false_warnings(traces)
+        out["false_warnings_lane"] = false_warnings([t for t, w in zip(traces, weave, strict=True) if not w])
+        out["false_warnings_weave"] = false_warnings([t for t, w in zip(traces, weave, strict=True) if w])
+    return out
