@@ -20,7 +20,7 @@ import time
 
 import numpy as np
 
-from suvtwin.estimators.joint import N0, LinearQuarterCar, _response, estimate_joint
+from suvtwin.estimators.joint import N0, LinearQuarterCar, corner_response, estimate_joint
 from suvtwin.estimators.quarter_car import (
     pressure_sigma_from_stiffness_sigma,
     stiffness_from_pressure,
@@ -43,7 +43,7 @@ def cramer_rao_pressure_std(pressure, level, duration, band=(0.05, 1.5), fmax=30
     kt = stiffness_from_pressure(pressure)
 
     def log_s(k, lsv):
-        h1, h2 = _response(f, k, QC)
+        h1, h2 = corner_response(f, k, QC)
         return np.log1p(np.exp(lsv) * (np.abs(h1) ** 2 + np.abs(h2) ** 2) / noise)
 
     dk = 1e-4 * kt

@@ -86,6 +86,9 @@ from suvtwin.tire_stiffness import TireStiffness, suv_tire_stiffness
 
 __all__ = [
     "JointEstimate",
+    "corner_response",
+    "signal_direction",
+    "signal_gain",
     "LinearQuarterCar",
     "estimate_joint",
     "profile_loglik",
@@ -138,7 +141,7 @@ class JointEstimate:
     info: dict
 
 
-def _response(
+def corner_response(
     f: np.ndarray, kt: np.ndarray, qc: LinearQuarterCar, *, roll: bool = False
 ) -> tuple[np.ndarray, np.ndarray]:
     """Sprung and unsprung acceleration per unit road velocity, shape broadcast(kt, f).
@@ -157,22 +160,22 @@ def _response(
     return s * zs, s * zu  # acceleration s^2 Z per road velocity s Zr
 
 
-def _gain(f: np.ndarray, kt: np.ndarray, qc: LinearQuarterCar) -> np.ndarray:
+def signal_gain(f: np.ndarray, kt: np.ndarray, qc: LinearQuarterCar) -> np.ndarray:
     r"""Signal power along u per unit road-velocity PSD, :math:`u^H M u`, shape broadcast(kt, f).
 
     Quarter car: :math:`|h|^2`. Roll-plane model: :math:`\tfrac12(|u^H h_H|^2 + |u^H h_R|^2)`.
     """
-    h1, h2 = _response(f, kt, qc)
+    h1, h2 = corner_response(f, kt, qc)
     if qc.roll_mass is None:
         return np.abs(h1) ** 2 + np.abs(h2) ** 2
-    u1, u2 = _direction(f, qc)
-    g1, g2 = _response(f, kt, qc, roll=True)
+    u1, u2 = signal_direction(f, qc)
+    g1, g2 = corner_response(f, kt, qc, roll=True)
     return 0.5 * (
         np.abs(np.conj(u1) * h1 + np.conj(u2) * h2) ** 2 + np.abs(np.conj(u1) * g1 + np.conj(u2) * g2) ** 2
     )
 
 
-def _direction(f: np.ndarray, qc: LinearQuarterCar) -> tuple[np.ndarray, np.ndarray]:
+def signal_direction(f: np.ndarray, qc: LinearQuarterCar) -> tuple[np.ndarray, np.ndarray]:
     """Unit vector u = h/|h| of the road-driven part of [acc_s, acc_us] (independent of k_t), (F,) each.
 
     For the roll-plane model, the heave quarter car's direction (the projection is then the exact
@@ -215,7 +218,7 @@ def whittle_loglik(
     `S_hat` (F, 2, 2) is the one-sided cross-spectral matrix per Hz at `f` (Hz), averaged
     over `n_segments`; levels Gd(n0) in m³, speed in m/s, noise std `sigma` in m/s².
     """
-    h1, h2 = _response(f[None, :], stiffness[:, None], qc)  # (P, F)
+    h1, h2 = corner_response(f[None, :], stiffness[:, None], qc)  # (P, F)
     a, b = np.abs(h1) ** 2, np.abs(h2) ** 2
     c = h1 * np.conj(h2)  # S12 / Sv
     sv = (4.0 * np.pi**2 * N0**2 * speed) * level[None, :, None]  # (1, L, 1)
@@ -534,10 +537,10 @@ def estimate_joint(
         log_marginal = np.empty_like(lam)
         log_n = np.log(f[None, :] / (N0 * speed[:, None]))  # (B, F)
         for c, model in enumerate(models):
-            u1, u2 = _direction(f, model)
+            u1, u2 = signal_direction(f, model)
             y = np.conj(u1) * X[0] + np.conj(u2) * X[1]
             power = np.mean(np.abs(y) ** 2, axis=1) * (2.0 * dt / m) / noise  # (B, F)
-            gain = _gain(f[None, :], stiffness[:, None], model) / noise  # (P, F)
+            gain = signal_gain(f[None, :], stiffness[:, None], model) / noise  # (P, F)
             if plain:  # w = 2: the level alone, profiled in numpy (chunked)
                 runs_at_once = max(1, _CHUNK // (stiffness.size * f.size))
                 for b0 in range(0, n_runs, runs_at_once):

@@ -404,7 +404,7 @@ def estimate_command(
     corner: Annotated[str, typer.Option(help="Corner to estimate: fl, fr, rl or rr.")] = "fl",
     estimator: Annotated[
         EstimatorName, typer.Option(help=estimator_help()),
-    ] = EstimatorName["imm"],
+    ] = EstimatorName["online"],
     params: Annotated[
         str,
         typer.Option(
@@ -430,6 +430,55 @@ def estimate_command(
     road = result.metadata["road_input"]
     what = f"{estimator.value}, {road} road" if road == road_input.value else estimator.value
     typer.echo(f"wrote {out} ({len(result.table)} samples, corner {corner}, {what})")
+
+
+@app.command("monitor")
+def monitor_command(
+    run: Annotated[
+        Path, typer.Argument(help="Run file (suvtwin simulate) or any Parquet with the same columns.")
+    ],
+    out: Annotated[
+        Path,
+        typer.Option("--out", help="Output Parquet: one row per update (every 2 s), per tyre the pressure, "
+                     "its σ, flags, the warning's reference, probability and state."),
+    ],
+    placard: Annotated[
+        float | None,
+        typer.Option(help="Placard pressure of every tyre, kPa (50–500): the warning's reference. "
+                     "Default: learned after the reset."),
+    ] = None,
+    reset_at: Annotated[
+        float | None,
+        typer.Option(help="Time of the driver's reset, s (default the run's start): the monitor learns "
+                     "each tyre's reference after it. Not with --placard."),
+    ] = None,
+    corners: Annotated[
+        str, typer.Option(help="Tyres to monitor, comma-separated among fl, fr, rl, rr.")
+    ] = "fl,fr,rl,rr",
+) -> None:
+    """Monitor all tyres' pressures online (causal, streaming) and warn of deflation (UN R141 / FMVSS 138)."""
+    _check_out(out, "--out", (".parquet",))
+    if placard is not None and reset_at is not None:
+        raise InputError("give --placard (a fixed reference) or --reset-at (a learned one), not both")
+    names = tuple(c.strip() for c in corners.split(",") if c.strip())
+    if not names or len(set(names)) != len(names) or any(c not in ("fl", "fr", "rl", "rr") for c in names):
+        raise InputError(f"--corners must list distinct tyres among fl, fr, rl, rr, got {corners!r}")
+    from suvtwin.pipeline.monitoring import monitor_run, write_monitor
+
+    result = monitor_run(run, corners=names, placard_kpa=placard, reset_at_s=reset_at)
+    write_monitor(result, out)
+    last = result.table.iloc[-1] if len(result.table) else None
+    typer.echo(f"wrote {out} ({len(result.table)} updates of {', '.join(names)})")
+    for c in names:
+        warned = result.metadata["warnings"][c]
+        now = "no estimate yet" if last is None else (
+            f"{last[f'{c}_pressure_hat_kpa']:.1f} ± {last[f'{c}_pressure_sigma_kpa']:.1f} kPa"
+            + ("" if last[f"{c}_observable"] else " (not observable)")
+        )  # fmt: skip
+        note = "" if warned is None else (
+            f"; WARNING at {warned['t_s']:.1f} s (P = {warned['loss_probability']:.3f})"
+        )  # fmt: skip
+        typer.echo(f"  {c}: {now}{note}")
 
 
 @app.command("score")

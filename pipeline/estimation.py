@@ -42,7 +42,9 @@ class EstimateRun:
     metadata: dict
 
 
-def _load_run(path: str | Path, corner: str) -> tuple[pd.DataFrame, dict, float]:
+def _load_run(path: str | Path, corner: str, *, gaps: bool = False) -> tuple[pd.DataFrame, dict, float]:
+    """The run's time, speed and corner columns (and true pressure if there), its metadata, dt;
+    `gaps`: NaN accelerometer samples are allowed (the estimator skips them)."""
     if corner not in CORNERS:
         raise InputError(f"--corner must be one of fl, fr, rl, rr, got {corner!r}")
     table = read_parquet_table(path, what="run file")
@@ -53,9 +55,10 @@ def _load_run(path: str | Path, corner: str) -> tuple[pd.DataFrame, dict, float]
     frame = table.select(
         needed + [c for c in (f"{corner}_pressure_kpa",) if c in table.column_names]
     ).to_pandas()
-    values = frame[needed].to_numpy(dtype=float)
+    checked = needed[:2] if gaps else needed
+    values = frame[checked].to_numpy(dtype=float)
     if not np.all(np.isfinite(values)):
-        bad = [c for c in needed if not np.all(np.isfinite(frame[c].to_numpy(dtype=float)))]
+        bad = [c for c in checked if not np.all(np.isfinite(frame[c].to_numpy(dtype=float)))]
         raise InputError(f"run file {str(path)!r}: column(s) {', '.join(bad)} hold NaN or infinite values")
     t = frame["t_s"].to_numpy(dtype=float)
     if t.size < 10:
@@ -75,10 +78,11 @@ def estimate_run(
 ) -> EstimateRun:
     """Run an estimator of the registry (:data:`suvtwin.pipeline.estimator_registry.ESTIMATORS`) on one
     corner of a run: `estimator` is its family (``"imm"``: paper 000's IMM, ``"ukf"``: its single UKF,
-    ``"joint"``: the road-level-free estimator on the corner's linearized physical quarter car) and
-    `road_input` its road input (``"synthetic"`` or ``"augmented"``; ignored by ``"joint"``)."""
+    ``"joint"``: the road-level-free estimator on the corner's linearized physical quarter car,
+    ``"online"``: the causal monitor on that corner alone) and `road_input` its road input
+    (``"synthetic"`` or ``"augmented"``; ignored by ``"joint"`` and ``"online"``)."""
     entry = find_estimator(estimator, road_input)
-    frame, meta, dt = _load_run(path, corner)
+    frame, meta, dt = _load_run(path, corner, gaps=entry.tolerates_gaps)
     vehicle = load_vehicle()
     scenario = meta.get("scenario", {})
     tire_file = scenario.get("tire_file")  # a run made with another tyre is estimated with its k_t(p)
@@ -104,6 +108,7 @@ def estimate_run(
         params=params,
         seeds=np.array([seed]),
         tire_file=tire_file,
+        speed_series_mps=frame["speed_mps"].to_numpy(dtype=float)[None, :],
     )
     batch = entry.run(signals)
     metadata = {
@@ -172,7 +177,7 @@ def score_estimate(estimate_path: str | Path, run_path: str | Path) -> dict:
         raise InputError(f"estimate file {str(estimate_path)!r} was not written by 'suvtwin estimate'")
     meta = json.loads(raw)
     corner = meta["corner"]
-    frame, _, _ = _load_run(run_path, corner)
+    frame, _, _ = _load_run(run_path, corner, gaps=True)
     truth_col = f"{corner}_pressure_kpa"
     if truth_col not in frame:
         raise InputError(f"run file {str(run_path)!r} lacks {truth_col}: no true pressure to score against")

@@ -64,7 +64,9 @@ class CornerSignals:
     `params`: the mode parameter file of model-bank estimators (``"identified"``, ``"paper"``
     or a path); `seeds`: one int per run (synthetic roads); `initial_pressure_kpa`: the initial
     estimate per run, kPa, or None for the estimator's default; `tire_file`: the tyre the runs
-    were made with (a ``.tir`` file; its k_t(p), eq. 3–4, and damping), None for the SUV's.
+    were made with (a ``.tir`` file; its k_t(p), eq. 3–4, and damping), None for the SUV's;
+    `speed_series_mps`: the speed at every sample, m/s, shape (B, T), for estimators that use the
+    speed as it is at each time (causal ones), None where only the mean is known.
     """
 
     acc_sprung: np.ndarray
@@ -78,6 +80,7 @@ class CornerSignals:
     seeds: np.ndarray | None = None
     initial_pressure_kpa: np.ndarray | None = None
     tire_file: str | Path | None = None
+    speed_series_mps: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -105,7 +108,8 @@ class Estimator:
     (``{c}`` stands for each mode's class letter); `mode_probabilities`: it writes
     ``mode_prob_{c}`` (the report draws them); `needs_classes`: mode classes the parameter file
     must hold; `single_model_baseline`: the entry this model bank is compared with (paper 000
-    Fig. 6: the IMM against its single UKF, same road input).
+    Fig. 6: the IMM against its single UKF, same road input); `tolerates_gaps`: it skips missing
+    (NaN) accelerometer samples itself, so a record with some is not refused.
     """
 
     name: str
@@ -119,6 +123,7 @@ class Estimator:
     mode_probabilities: bool = False
     needs_classes: tuple[str, ...] = ()
     single_model_baseline: str | None = None
+    tolerates_gaps: bool = False
 
 
 def _run_mode_bank(
@@ -194,6 +199,57 @@ def _run_joint(signals: CornerSignals) -> BatchEstimate:
     )
 
 
+def _run_online(signals: CornerSignals) -> BatchEstimate:
+    """The online monitor (:mod:`suvtwin.estimators.monitor`) on the corner alone, one stream per run,
+    its estimate held from each update to the next (before the first: the prior)."""
+    import numpy as np
+
+    from suvtwin.estimators.monitor import TyreMonitor, pressure_at
+    from suvtwin.pipeline.estimation import linear_corner_model
+    from suvtwin.tire_stiffness import (
+        stiffness_at_pressure_array,
+        stiffness_sigma_at_pressure_sigma,
+        tire_stiffness_of,
+    )
+
+    qc = linear_corner_model(signals.corner, signals.sprung_mass, tire_file=signals.tire_file)
+    tire = tire_stiffness_of(signals.tire_file)
+    n_runs, n_steps = signals.acc_sprung.shape
+    t = np.arange(n_steps) * signals.dt
+    p = np.empty((n_runs, n_steps))
+    sig = np.empty((n_runs, n_steps))
+    observable = np.zeros((n_runs, n_steps))
+    level = np.full((n_runs, n_steps), np.nan)
+    used = []
+    for b in range(n_runs):
+        speed = (signals.speed_series_mps[b] if signals.speed_series_mps is not None
+                 else np.full(n_steps, signals.speed_mps[b]))  # fmt: skip
+        monitor = TyreMonitor([qc], dt=signals.dt, tire=tire, names=[signals.corner])
+        out = monitor.update(t, speed, signals.acc_sprung[b][:, None], signals.acc_unsprung[b][:, None])
+        prior_pa = monitor.config.prior_pressure_kpa or tire.p0 / 1e3
+        pb, sb = pressure_at(out, t, np.array([prior_pa * 1e3]), monitor.config.prior_sigma_kpa * 1e3)
+        p[b], sig[b] = pb[:, 0], sb[:, 0]
+        idx = np.searchsorted(out.t_s, t, side="right") - 1
+        seen = idx >= 0
+        observable[b, seen] = out.observable[idx[seen], 0]
+        level[b, seen] = out.road_level[idx[seen]]
+        used.append(int(monitor.counts["used"][0]))
+    law = (tire.kt0, tire.p0, tire.pfz1)
+    return BatchEstimate(
+        pressure_pa=p,
+        pressure_sigma_pa=sig,
+        stiffness=stiffness_at_pressure_array(p, *law),
+        stiffness_sigma=stiffness_sigma_at_pressure_sigma(sig, *law),
+        columns={"observable": observable, "road_level_hat_m3": level},
+        info={
+            "road_input": "estimated level",
+            "causal": True,
+            "config": asdict(monitor.config),
+            "windows_used": used,
+        },
+    )
+
+
 _MODE_BANK_COLUMNS = ("mode_prob_{c}", "mode_pressure_{c}_kpa")
 
 _IMM = "paper 000's IMM of one UKF per road class (A-D) of the parameter file"
@@ -225,6 +281,11 @@ ESTIMATORS: dict[str, Estimator] = {
                   label="joint (road level estimated)", color="tab:green",
                   description="the road-level-free estimator on the corner's linear roll-plane model "
                   "(road level and waviness estimated)", columns=("road_level_hat_m3",)),
+        Estimator(name="online", family="online", road_input=None, run=_run_online,
+                  label="online monitor (causal)", color="tab:purple",
+                  description="the online monitor (ours): causal, streaming, follows pressure changes, "
+                  "flags what it cannot observe", columns=("observable", "road_level_hat_m3"),
+                  tolerates_gaps=True),
     )
 }  # fmt: skip
 """Every estimator, by campaign name. ``imm_*``: paper 000's IMM of four UKFs with the paper's

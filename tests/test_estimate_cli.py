@@ -55,10 +55,10 @@ def _columns(n=100):
     "change, argv_extra, message",
     [
         ({"fl_accel_unsprung_mps2": None}, [], "lacks column(s) fl_accel_unsprung_mps2"),
-        ({"fl_accel_sprung_mps2": np.r_[np.nan, np.zeros(99)]}, [], "NaN"),
+        ({"fl_accel_sprung_mps2": np.r_[np.nan, np.zeros(99)]}, ["--estimator", "imm"], "NaN"),
         ({"t_s": np.r_[0.0, np.arange(99) * 1e-3]}, [], "strictly increasing"),
         ({}, ["--corner", "xx"], "--corner must be one of fl, fr, rl, rr"),
-        ({}, ["--params", "missing.json"], "does not exist"),
+        ({}, ["--estimator", "imm", "--params", "missing.json"], "does not exist"),
     ],
 )
 def test_bad_input_exits_2(tmp_path, capsys, change, argv_extra, message):

@@ -18,14 +18,15 @@ from suvtwin.pipeline.estimator_registry import (
 
 
 def test_command_line_pairs_map_one_to_one_onto_campaign_names():
-    assert estimator_families() == ("imm", "ukf", "joint")
+    assert estimator_families() == ("imm", "ukf", "joint", "online")
     assert road_inputs() == ("synthetic", "augmented")
     pairs = {(e.family, e.road_input): name for name, e in ESTIMATORS.items()}
     assert len(pairs) == len(ESTIMATORS)
     assert find_estimator("imm", "augmented").name == "imm_augmented"
     assert find_estimator("ukf", "synthetic").name == "ukf_synthetic"
     assert find_estimator("joint", "augmented").name == "joint"  # takes no road input
-    with pytest.raises(InputError, match="--estimator must be one of imm, ukf, joint"):
+    assert find_estimator("online", None).name == "online"
+    with pytest.raises(InputError, match="--estimator must be one of imm, ukf, joint, online"):
         find_estimator("kalman", "synthetic")
     with pytest.raises(InputError, match="--road-input"):
         find_estimator("imm", "true")

@@ -5,12 +5,12 @@ import pytest
 
 from suvtwin.estimators.joint import (
     LinearQuarterCar,
-    _direction,
-    _response,
     _spectrum,
+    corner_response,
     estimate_joint,
     profile_loglik,
     profile_loglik_slope,
+    signal_direction,
     whittle_loglik,
 )
 from suvtwin.estimators.quarter_car import simulate_quarter_car, stiffness_from_pressure
@@ -97,9 +97,9 @@ def test_projected_likelihood_equals_the_2x2_whittle_likelihood():
     full = whittle_loglik(f, S_hat, k, stiffness=kt, level=np.array([level]), qc=QC, speed=SPEED,
                           sigma=sigma, dt=DT)[:, 0]  # fmt: skip
     noise = 2 * sigma**2 * DT
-    u = np.stack(_direction(f, QC), axis=-1)
+    u = np.stack(signal_direction(f, QC), axis=-1)
     power = np.real(np.einsum("fi,fij,fj->f", np.conj(u), S_hat, u))[None] / noise
-    h1, h2 = _response(f[None], kt[:, None], QC)
+    h1, h2 = corner_response(f[None], kt[:, None], QC)
     log_sv = np.full((1, 1), np.log(4 * np.pi**2 * 0.01 * SPEED * level))
     scalar, _, _ = profile_loglik(power, (np.abs(h1) ** 2 + np.abs(h2) ** 2) / noise,
                                   np.full((1, f.size), float(k)), log_sv_bounds=(log_sv, log_sv))  # fmt: skip
@@ -152,7 +152,7 @@ def test_slope_profile_finds_the_grid_maximum():
     rng = np.random.default_rng(3)
     f = np.linspace(1.0, 25.0, 200)
     log_n = np.log(f / (0.1 * SPEED))[None]
-    h1, h2 = _response(f, stiffness_from_pressure(180e3), QC)
+    h1, h2 = corner_response(f, stiffness_from_pressure(180e3), QC)
     gain = (np.abs(h1) ** 2 + np.abs(h2) ** 2)[None] / (2 * 0.25 * DT)
     true_r = np.exp(np.log(0.05) - 0.4 * log_n) * gain
     power = (1.0 + true_r) * rng.exponential(size=f.size)

@@ -67,6 +67,7 @@ def _read_corner(path: str, corner: str) -> dict:
     return {
         "t": frame["t_s"].to_numpy(),
         "speed": float(frame["speed_mps"].mean()),
+        "speed_series": frame["speed_mps"].to_numpy(dtype=float),
         "acc_s": frame[columns[2]].to_numpy(),
         "acc_u": frame[columns[3]].to_numpy(),
     }
@@ -89,6 +90,7 @@ def _estimate_to(args: tuple) -> list[str]:
         acc_sprung=acc_s, acc_unsprung=acc_u, dt=dt, speed_mps=speed, corner=corner, sprung_mass=ms,
         unsprung_mass=mus, params=params_path, seeds=np.asarray(seeds),
         initial_pressure_kpa=np.asarray(initial_kpa),
+        speed_series_mps=np.array([d["speed_series"] for d in data]),
     )  # fmt: skip
     batch = ESTIMATORS[estimator].run(signals)
     for b, out in enumerate(out_paths):

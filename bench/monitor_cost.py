@@ -1,0 +1,101 @@
+"""Cost of the online monitor over a long drive: is the cost per second of data the same after an hour?
+
+Run: ``python bench/monitor_cost.py [minutes] [run.parquet]`` — prints JSON.
+
+A MuJoCo run (default: a 60 s class C run at 90 km/h with four different pressures, simulated
+here) is streamed through one four-corner :class:`suvtwin.estimators.monitor.TyreMonitor` again
+and again with time running on, in 10 s chunks, until `minutes` (default 60) of data have
+gone through, on one core. Printed: the wall time per second of data over the first minute and
+over the last minute, their ratio (the issue asks ≤ 1.2 at one hour), the real-time factor
+over the whole drive (asks ≥ 500), the state's size at the start and the end (bytes), and the
+compile time of the first call (excluded from the rates).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import tempfile
+import time
+
+import numpy as np
+import pyarrow.parquet as pq
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+CORNERS = ("fl", "fr", "rl", "rr")
+
+
+def _run_file() -> str:
+    from suvtwin.pipeline.scenario import parse_scenario
+    from suvtwin.pipeline.simulator import simulate, write_run
+
+    scenario = parse_scenario(
+        {"duration_s": 60.0, "seed": 904321, "speed_kmh": 90.0,
+         "road": {"segments": [{"length_m": 1600.0, "gd_n0": 150e-6}]},
+         "pressure_kpa": {"fl": 230.0, "fr": 200.0, "rl": 170.0, "rr": 140.0}},
+        source="bench",
+    )  # fmt: skip
+    path = os.path.join(tempfile.mkdtemp(), "run.parquet")
+    write_run(simulate(scenario), path)
+    return path
+
+
+def main() -> None:
+    minutes = float(sys.argv[1]) if len(sys.argv) > 1 else 60.0
+    path = sys.argv[2] if len(sys.argv) > 2 else _run_file()
+    from suvtwin.estimators.monitor import TyreMonitor
+    from suvtwin.pipeline.monitoring import corner_models
+
+    frame = pq.read_table(path).to_pandas()
+    t0 = frame["t_s"].to_numpy()
+    dt = float(np.median(np.diff(t0)))
+    v = frame["speed_mps"].to_numpy()
+    acc_s = frame[[f"{c}_accel_sprung_mps2" for c in CORNERS]].to_numpy()
+    acc_u = frame[[f"{c}_accel_unsprung_mps2" for c in CORNERS]].to_numpy()
+    n = t0.size
+    monitor = TyreMonitor(corner_models(CORNERS), dt=dt, names=CORNERS)
+    chunk = int(round(10.0 / dt))
+    start = time.perf_counter()
+    monitor.update(np.arange(chunk) * dt, v[:chunk], acc_s[:chunk], acc_u[:chunk])  # compiles
+    compile_s = time.perf_counter() - start
+    state_start = monitor.state_nbytes
+    total = int(round(minutes * 60.0 / dt))
+    done = chunk
+    per_minute = []  # (data s, wall s) per minute of data
+    minute_data = minute_wall = 0.0
+    wall_total = 0.0
+    while done < total:
+        i = done % n
+        m = min(chunk, n - i, total - done)
+        t = (done + np.arange(m)) * dt
+        tick = time.perf_counter()
+        monitor.update(t, v[i : i + m], acc_s[i : i + m], acc_u[i : i + m])
+        wall = time.perf_counter() - tick
+        done += m
+        wall_total += wall
+        minute_data += m * dt
+        minute_wall += wall
+        if minute_data >= 60.0 - 1e-9:
+            per_minute.append((minute_data, minute_wall))
+            minute_data = minute_wall = 0.0
+    first = per_minute[0][1] / per_minute[0][0]
+    last = per_minute[-1][1] / per_minute[-1][0]
+    print(json.dumps({
+        "data_minutes": round(done * dt / 60.0, 2),
+        "corners": len(CORNERS),
+        "compile_s": round(compile_s, 2),
+        "wall_per_data_s_first_minute_ms": round(1e3 * first, 3),
+        "wall_per_data_s_last_minute_ms": round(1e3 * last, 3),
+        "last_over_first": round(last / first, 3),
+        "real_time_factor": round((done - chunk) * dt / wall_total, 1),
+        "state_bytes_start": state_start,
+        "state_bytes_end": monitor.state_nbytes,
+        "segments": monitor.counts["segments"],
+    }, indent=2))  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()

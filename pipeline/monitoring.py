@@ -1,0 +1,202 @@
+"""Running the online tyre-pressure monitor on a run file: the glue between files and the monitor.
+
+Usual call: ``result = monitor_run("run.parquet", placard_kpa=230)``; ``write_monitor(result, path)``.
+
+A run file is the simulator's Parquet or any Parquet with ``t_s`` (uniform, increasing),
+``speed_mps`` and each corner's ``{c}_accel_sprung_mps2`` / ``{c}_accel_unsprung_mps2``
+(NaN where a sample is missing: such segments are skipped, not refused). The file is fed to
+:class:`suvtwin.estimators.monitor.TyreMonitor` in chunks of ``chunk_s`` seconds, as a car
+would stream it; the result does not depend on the chunk length. Each corner's model is
+:func:`suvtwin.pipeline.estimation.linear_corner_model` with the run's extra load (from its
+metadata, if any) and the run's tyre.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from suvtwin.errors import InputError
+from suvtwin.estimators.deflation import DeflationRule, deflation_warnings
+from suvtwin.estimators.monitor import SKIP_REASONS, MonitorConfig, MonitorUpdate, TyreMonitor
+from suvtwin.estimators.quarter_car import sprung_mass_share
+from suvtwin.files import atomic_write, read_parquet_table
+from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
+from suvtwin.pipeline.estimation import linear_corner_model
+from suvtwin.tire_stiffness import tire_stiffness_of
+
+__all__ = ["MonitorResult", "corner_models", "monitor_run", "monitor_signals", "write_monitor"]
+
+_METADATA_KEY = b"suvtwin.monitor"
+
+
+@dataclass(frozen=True)
+class MonitorResult:
+    """The monitor's table (one row per update; see :func:`monitor_run`) and what made it."""
+
+    table: pd.DataFrame
+    metadata: dict
+    update: MonitorUpdate
+
+
+def corner_models(corners: tuple[str, ...], *, load_kg: float = 0.0, tire_file: str | Path | None = None):
+    """The SUV's linear corner models of `corners`, with `load_kg` of extra load on the chassis."""
+    vehicle = load_vehicle()
+    models = []
+    for corner in corners:
+        front = corner.startswith("f")
+        ms = sprung_mass_share(
+            vehicle.chassis.mass,
+            a_opposite=vehicle.chassis.a2 if front else vehicle.chassis.a1,
+            wheelbase=vehicle.wheelbase,
+            load=load_kg,
+        )
+        models.append(linear_corner_model(corner, ms, tire_file=tire_file))
+    return models
+
+
+def monitor_signals(
+    t_s: np.ndarray,
+    speed_mps: np.ndarray,
+    acc_sprung: np.ndarray,
+    acc_unsprung: np.ndarray,
+    *,
+    corners: tuple[str, ...] = CORNERS,
+    load_kg: float = 0.0,
+    tire_file: str | Path | None = None,
+    config: MonitorConfig | None = None,
+    chunk_s: float = 10.0,
+) -> tuple[TyreMonitor, MonitorUpdate]:
+    """Stream arrays through a new monitor in chunks of `chunk_s` s; the monitor and all its rows.
+
+    `acc_sprung`, `acc_unsprung`: (T, C) in the order of `corners`."""
+    t = np.asarray(t_s, dtype=float)
+    if t.size < 2:
+        raise InputError("a run needs at least two samples")
+    dt = float(np.median(np.diff(t)))
+    monitor = TyreMonitor(
+        corner_models(corners, load_kg=load_kg, tire_file=tire_file), dt=dt, config=config,
+        tire=[tire_stiffness_of(tire_file)] * len(corners), names=corners,
+    )  # fmt: skip
+    step = max(int(round(chunk_s / dt)), 1)
+    parts = [
+        monitor.update(
+            t[i : i + step], speed_mps[i : i + step], acc_sprung[i : i + step], acc_unsprung[i : i + step]
+        )
+        for i in range(0, t.size, step)
+    ]
+    return monitor, MonitorUpdate.concatenate(parts)
+
+
+def monitor_run(
+    path: str | Path,
+    *,
+    corners: tuple[str, ...] = CORNERS,
+    placard_kpa: float | None = None,
+    reset_at_s: float | None = None,
+    config: MonitorConfig | None = None,
+    rule: DeflationRule | None = None,
+    chunk_s: float = 10.0,
+) -> MonitorResult:
+    """Run the monitor and the deflation warning on a run file.
+
+    The warning's reference is `placard_kpa` (the same for every tyre) if given, else what the
+    monitor learns after a driver reset at `reset_at_s` (default the run's start). The table has
+    one row per update: ``t_s``, ``speed_mps``, per corner ``{c}_pressure_hat_kpa``,
+    ``{c}_pressure_sigma_kpa``, ``{c}_observable``, ``{c}_status`` (what became of the segment:
+    ``used`` or why skipped), ``{c}_reference_kpa``, ``{c}_loss_probability``, ``{c}_warning``
+    (latched), and the shared ``road_level_hat_m3`` and ``waviness_hat``.
+    """
+    unknown = [c for c in corners if c not in CORNERS]
+    if unknown or not corners:
+        raise InputError(f"corners must be among fl, fr, rl, rr, got {', '.join(corners) or 'none'}")
+    if placard_kpa is not None and not (np.isfinite(placard_kpa) and 50.0 <= placard_kpa <= 500.0):
+        raise InputError(f"--placard must be a pressure within 50–500 kPa, got {placard_kpa}")
+    table = read_parquet_table(path, what="run file")
+    needed = ["t_s", "speed_mps"] + [f"{c}_accel_{w}_mps2" for c in corners for w in ("sprung", "unsprung")]
+    missing = [c for c in needed if c not in table.column_names]
+    if missing:
+        raise InputError(f"run file {str(path)!r} lacks column(s) {', '.join(missing)}")
+    frame = table.select(needed).to_pandas()
+    t = frame["t_s"].to_numpy(dtype=float)
+    if t.size < 10 or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
+        raise InputError(f"run file {str(path)!r}: t_s must be finite, strictly increasing, ≥ 10 samples")
+    step = np.diff(t)
+    if np.ptp(step) > 1e-6 * np.mean(step) + 1e-12:
+        raise InputError(f"run file {str(path)!r}: t_s must be uniformly sampled (mark missing samples NaN)")
+    if reset_at_s is not None and not (np.isfinite(reset_at_s) and t[0] <= reset_at_s <= t[-1]):
+        raise InputError(f"--reset-at must lie within the run, {t[0]:g}–{t[-1]:g} s, got {reset_at_s}")
+    raw = (table.schema.metadata or {}).get(b"suvtwin.run")
+    meta = json.loads(raw) if raw else {}
+    scenario = meta.get("scenario", {})
+    tire_file = scenario.get("tire_file")
+    if tire_file is not None and not Path(tire_file).is_file():
+        raise InputError(f"run {path} was simulated with the tyre file {tire_file}, which is not there now")
+    load = float(sum(item.get("mass_kg", 0.0) for item in scenario.get("load", [])))
+    acc_s = frame[[f"{c}_accel_sprung_mps2" for c in corners]].to_numpy(dtype=float)
+    acc_u = frame[[f"{c}_accel_unsprung_mps2" for c in corners]].to_numpy(dtype=float)
+    monitor, update = monitor_signals(
+        t, frame["speed_mps"].to_numpy(dtype=float), acc_s, acc_u, corners=corners, load_kg=load,
+        tire_file=tire_file, config=config, chunk_s=chunk_s,
+    )  # fmt: skip
+    rule = rule or DeflationRule()
+    warn = deflation_warnings(
+        update.t_s, update.pressure_pa / 1e3, update.pressure_sigma_pa / 1e3, update.observable,
+        update.speed_mps,
+        placard_kpa=placard_kpa, reset_at_s=t[0] if reset_at_s is None else reset_at_s, rule=rule,
+    )  # fmt: skip
+    columns: dict[str, np.ndarray] = {"t_s": update.t_s, "speed_mps": update.speed_mps}
+    for i, c in enumerate(corners):
+        columns[f"{c}_pressure_hat_kpa"] = update.pressure_pa[:, i] / 1e3
+        columns[f"{c}_pressure_sigma_kpa"] = update.pressure_sigma_pa[:, i] / 1e3
+        columns[f"{c}_observable"] = update.observable[:, i]
+        columns[f"{c}_status"] = np.array(SKIP_REASONS)[update.status[:, i]]
+        columns[f"{c}_reference_kpa"] = warn.reference_kpa[:, i]
+        columns[f"{c}_loss_probability"] = warn.probability[:, i]
+        columns[f"{c}_warning"] = warn.warning[:, i]
+    columns["road_level_hat_m3"] = update.road_level
+    columns["waviness_hat"] = update.waviness
+    counts = monitor.counts
+    metadata = {
+        "run_file": str(path),
+        "corners": list(corners),
+        "tire_file": tire_file,
+        "load_kg": load,
+        "placard_kpa": placard_kpa,
+        "reset_at_s": None if placard_kpa is not None else float(t[0] if reset_at_s is None else reset_at_s),
+        "config": asdict(monitor.config),
+        "rule": asdict(rule),
+        "segments": counts["segments"],
+        "segment_status": {r: dict(zip(corners, counts[r].tolist(), strict=True)) for r in SKIP_REASONS},
+        "restarts": dict(zip(corners, counts["restarts"].tolist(), strict=True)),
+        "warnings": {
+            c: (
+                None
+                if np.isnan(warn.warning_time_s[i])
+                else {
+                    "t_s": float(warn.warning_time_s[i]),
+                    "loss_probability": float(warn.warning_probability[i]),
+                    "pressure_hat_kpa": float(warn.warning_pressure_kpa[i]),
+                    "reference_kpa": float(warn.warning_reference_kpa[i]),
+                }
+            )
+            for i, c in enumerate(corners)
+        },  # fmt: skip
+    }
+    return MonitorResult(table=pd.DataFrame(columns), metadata=metadata, update=update)
+
+
+def write_monitor(result: MonitorResult, path: str | Path) -> None:
+    """Write a monitor's table to Parquet (atomically), what made it in the metadata."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    table = pa.Table.from_pandas(result.table, preserve_index=False)
+    table = table.replace_schema_metadata(
+        {_METADATA_KEY: json.dumps(result.metadata, sort_keys=True).encode()}
+    )
+    atomic_write(path, lambda tmp: pq.write_table(table, tmp, compression="zstd"))

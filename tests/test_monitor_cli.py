@@ -1,0 +1,70 @@
+"""suvtwin monitor and suvtwin estimate --estimator online: files in and out, gaps tolerated, and one
+clear message for bad input."""
+
+import json
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+
+from suvtwin.pipeline.cli import main
+
+
+@pytest.fixture(scope="module")
+def run_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("run") / "run.parquet"
+    argv = ["simulate", "--road-class", "C", "--speed", "70", "--pressure", "180", "--duration", "20",
+            "--seed", "3", "--out", str(path), "--no-progress"]  # fmt: skip
+    assert main(argv) == 0
+    return path
+
+
+def test_monitor_writes_every_tyre_and_warns_against_a_placard(run_file, tmp_path, capsys):
+    out = tmp_path / "monitor.parquet"
+    # 180 kPa in every tyre against a 250 kPa placard: 28 % low, all four (FMVSS 138's case)
+    assert main(["monitor", str(run_file), "--out", str(out), "--placard", "250"]) == 0
+    table = pq.read_table(out)
+    frame = table.to_pandas()
+    assert len(frame) == 10  # one update every 2 s
+    np.testing.assert_allclose(frame["t_s"], np.arange(1, 11) * 2.0 - 1e-3)
+    for c in ("fl", "fr", "rl", "rr"):
+        for col in ("pressure_hat_kpa", "pressure_sigma_kpa", "observable", "status", "reference_kpa",
+                    "loss_probability", "warning"):  # fmt: skip
+            assert f"{c}_{col}" in frame
+        assert (frame[f"{c}_reference_kpa"] == 250.0).all()
+    meta = json.loads(table.schema.metadata[b"suvtwin.monitor"])
+    assert meta["placard_kpa"] == 250.0 and meta["segments"] == 10
+    warned = [meta["warnings"][c] for c in ("fl", "fr", "rl", "rr")]
+    assert all(w is not None and w["loss_probability"] >= 0.95 for w in warned)
+    assert "WARNING" in capsys.readouterr().out
+
+
+def test_online_estimate_tolerates_a_gap(run_file, tmp_path):
+    frame = pq.read_table(run_file).to_pandas()
+    frame.loc[3000:3500, "fl_accel_unsprung_mps2"] = np.nan
+    gapped = tmp_path / "gapped.parquet"
+    frame.to_parquet(gapped)
+    out = tmp_path / "est.parquet"
+    assert main(["estimate", str(gapped), "--out", str(out)]) == 0  # the default estimator is the online one
+    est = pq.read_table(out)
+    meta = json.loads(est.schema.metadata[b"suvtwin.estimate"])
+    assert meta["estimator"] == "online" and meta["causal"]
+    assert meta["windows_used"][0] < 10  # the windows holding the gap were skipped
+    values = est.column("pressure_hat_kpa").to_numpy()
+    assert est.num_rows == len(frame) and np.all(np.isfinite(values))
+
+
+@pytest.mark.parametrize(
+    "argv_extra, message",
+    [
+        (["--placard", "900"], "--placard must be a pressure within 50–500 kPa"),
+        (["--placard", "230", "--reset-at", "0"], "not both"),
+        (["--reset-at", "99"], "--reset-at must lie within the run"),
+        (["--corners", "fl,xx"], "--corners must list distinct tyres"),
+    ],
+)
+def test_bad_input_exits_2_and_writes_nothing(run_file, tmp_path, capsys, argv_extra, message):
+    out = tmp_path / "m.parquet"
+    assert main(["monitor", str(run_file), "--out", str(out), *argv_extra]) == 2
+    assert message in capsys.readouterr().err
+    assert not out.exists()
