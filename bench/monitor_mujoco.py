@@ -32,47 +32,13 @@ from pathlib import Path
 import numpy as np
 
 from suvtwin.pipeline.monitor_scenarios import SETS, monitor_traces, scenario_set, simulate_cached
-from suvtwin.pipeline.monitor_scoring import score_set
+from suvtwin.pipeline.monitor_scoring import issue_targets, score_set
 
 ISSUE_SIZE = {"constant": 100, "slow_leak": 20, "drop": 20, "low_speed": 20, "warning": 100,
               "nominal_long": 130}  # fmt: skip
 """Runs the issue asks for (``constant``, ``warning``: ≥ 100; ``nominal_long``: ≥ 500 simulated min, which
 130 runs give: 98 of 300 s and 32 weaves of 30 s); the change and low-speed sets have no stated size."""
 HEIGHTFIELD_HALF_WIDTH_M = 2.0  # suvtwin.mjcf.builder.HALF_WIDTH_Y: the road strip is 4 m wide
-
-
-def _target(value, op: str, bound: float) -> dict:
-    met = value is not None and bool(value <= bound if op == "<=" else value >= bound)
-    return {"value": value, "target": f"{op} {bound:g}", "met": met}
-
-
-def targets(set_name: str, scores: dict) -> dict:
-    """The issue's 'done when' numbers for this set, with the measured value and whether it is met."""
-    e10, e30 = scores["error_at"]["10s"], scores["error_at"]["30s"]
-    cov = scores["coverage"]["inside"]
-    out = {}
-    if set_name == "constant":
-        out["abs_mean_error_10s_kpa"] = _target(abs(e10["mean_kpa"]) if e10.get("n") else None, "<=", 3.0)
-        out["error_std_10s_kpa"] = _target(e10.get("std_kpa"), "<=", 10.0)
-        out["error_std_30s_kpa"] = _target(e30.get("std_kpa"), "<=", 6.0)
-        out["inside_2sigma_after_2s"] = _target(cov, ">=", 0.90)
-        out["runs"] = _target(scores["runs"], ">=", 100)
-    elif set_name in ("slow_leak", "drop"):
-        ch = scores["change"]
-        out["settle_s_max"] = _target(ch["settle_s_max"], "<=", 15.0)
-        out["inside_2sigma_during_and_after"] = _target(ch["inside_2sigma_during_and_after"], ">=", 0.85)
-    elif set_name == "low_speed":
-        ls = scores["low_speed"]
-        out["observable_and_outside_accuracy"] = _target(ls.get("wrong"), "<=", 0.0)
-        out["outside_3sigma"] = _target(ls.get("outside_3sigma"), "<=", 0.0)
-    elif set_name == "warning":
-        out["detected_within_60s"] = _target(scores["warning"]["detected"], ">=", 0.95)
-        out["runs"] = _target(scores["runs"], ">=", 100)
-    elif set_name == "nominal_long":
-        fw = scores["false_warnings"]
-        out["false_warnings"] = _target(fw["false_warnings"], "<=", 0)
-        out["simulated_min"] = _target(round(fw["simulated_min"], 1), ">=", 500.0)
-    return out
 
 
 def run_conditions(path: Path) -> dict:
@@ -234,7 +200,7 @@ def main(argv: list[str] | None = None) -> dict:
     if mon_costs:
         out.setdefault("monitor", {})["failed"] = {k: v for c in mon_costs for k, v in c["failed"].items()}
         scores = score_set(args.set, traces, [r.info for r in scored])
-        out["targets"] = targets(args.set, scores)
+        out["targets"] = issue_targets(args.set, scores)
         out["scores"] = scores
         out["road_level_hat_over_truth_at_end"] = _level_ratio(scored, extras)
     out["conditions"] = _conditions_summary(conditions)

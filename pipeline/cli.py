@@ -611,10 +611,11 @@ def run_command(
         f"campaign {config.name} ({summary['config_hash']}) done in {time.perf_counter() - started:.0f} s: "
         f"identification {t['identification_s']:.0f} s, {t['simulated_runs']} runs simulated in "
         f"{t['simulation_s']:.0f} s, {t['estimates_made']} estimates in {t['estimation_s']:.0f} s, "
-        f"paper 000's premise check in {t['premise_s']:.0f} s"
+        f"paper 000's premise check in {t['premise_s']:.0f} s, the online monitor's study in "
+        f"{t['monitor_s']:.0f} s"
     )
-    premise = f", {out / 'premise.csv'}" if (out / "premise.csv").is_file() else ""
-    typer.echo(f"wrote {out / 'report.html'}, {out / 'metrics.csv'}, {out / 'monte_carlo.csv'}{premise}")
+    extra = "".join(f", {out / name}" for name in ("premise.csv", "monitor.json") if (out / name).is_file())
+    typer.echo(f"wrote {out / 'report.html'}, {out / 'metrics.csv'}, {out / 'monte_carlo.csv'}{extra}")
 
 
 def main(argv: list[str] | None = None) -> int:

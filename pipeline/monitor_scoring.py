@@ -32,6 +32,7 @@ __all__ = [
     "driving_time",
     "errors_at",
     "false_warnings",
+    "issue_targets",
     "low_speed_shares",
     "monitor_trace",
     "score_set",
@@ -391,4 +392,38 @@ def score_set(
         out["false_warnings"] = false_warnings(traces)
         out["false_warnings_lane"] = false_warnings([t for t, w in zip(traces, weave, strict=True) if not w])
         out["false_warnings_weave"] = false_warnings([t for t, w in zip(traces, weave, strict=True) if w])
+    return out
+
+
+def _target(value, op: str, bound: float) -> dict:
+    met = value is not None and bool(value <= bound if op == "<=" else value >= bound)
+    return {"value": value, "target": f"{op} {bound:g}", "met": met}
+
+
+def issue_targets(set_name: str, scores: dict) -> dict:
+    """The issue's 'done when' numbers for this set, with the measured value and whether it is met."""
+    e10, e30 = scores["error_at"]["10s"], scores["error_at"]["30s"]
+    cov = scores["coverage"]["inside"]
+    out = {}
+    if set_name == "constant":
+        out["abs_mean_error_10s_kpa"] = _target(abs(e10["mean_kpa"]) if e10.get("n") else None, "<=", 3.0)
+        out["error_std_10s_kpa"] = _target(e10.get("std_kpa"), "<=", 10.0)
+        out["error_std_30s_kpa"] = _target(e30.get("std_kpa"), "<=", 6.0)
+        out["inside_2sigma_after_2s"] = _target(cov, ">=", 0.90)
+        out["runs"] = _target(scores["runs"], ">=", 100)
+    elif set_name in ("slow_leak", "drop"):
+        ch = scores["change"]
+        out["settle_s_max"] = _target(ch["settle_s_max"], "<=", 15.0)
+        out["inside_2sigma_during_and_after"] = _target(ch["inside_2sigma_during_and_after"], ">=", 0.85)
+    elif set_name == "low_speed":
+        ls = scores["low_speed"]
+        out["observable_and_outside_accuracy"] = _target(ls.get("wrong"), "<=", 0.0)
+        out["outside_3sigma"] = _target(ls.get("outside_3sigma"), "<=", 0.0)
+    elif set_name == "warning":
+        out["detected_within_60s"] = _target(scores["warning"]["detected"], ">=", 0.95)
+        out["runs"] = _target(scores["runs"], ">=", 100)
+    elif set_name == "nominal_long":
+        fw = scores["false_warnings"]
+        out["false_warnings"] = _target(fw["false_warnings"], "<=", 0)
+        out["simulated_min"] = _target(round(fw["simulated_min"], 1), ">=", 500.0)
     return out

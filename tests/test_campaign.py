@@ -30,6 +30,8 @@ SMALL = dict(
     params_file="paper",
     chunk_size=2,
     premise_runs_per_class=1,
+    monitor_leak_runs=1,
+    monitor_warning_runs=1,
 )
 
 
@@ -150,6 +152,14 @@ def test_report_is_self_contained_with_goals_and_figures(finished):
     assert set(premise.road_class) == set("ABCD") and (premise.runs == 1).all()
     assert {"imm_synthetic", "ukf_synthetic", "imm_true_road"} <= set(premise.estimator)
     assert np.isfinite(premise.rmse_kpa).all()
+    # the online monitor's study: a slow leak and a warning run, scored beside issue 12's targets
+    assert "Online tyre-pressure monitor (ours)" in page
+    monitor = json.loads((out / "monitor.json").read_text())
+    assert set(monitor) == {"slow_leak", "warning"}
+    assert monitor["slow_leak"]["scores"]["runs"] == 1 and "settle_s_max" in monitor["slow_leak"]["targets"]
+    assert monitor["warning"]["targets"]["detected_within_60s"]["value"] in (0.0, 1.0)
+    example = monitor["slow_leak"]["example"]
+    assert example["truth_kpa"][0] > example["truth_kpa"][-1]  # the leaking tyre's true pressure falls
 
 
 def _count(folder: Path, pattern: str) -> int:
@@ -205,7 +215,8 @@ def test_bad_campaign_input_is_one_clear_message(tmp_path, capsys):
 def test_identification_is_cached_one_class_at_a_time(tmp_path):
     ident = {"classes": "AB", "pop_size": 8, "n_gen": 2, "duration_s": 2.0}
     settings = dict(monte_carlo_runs=0, scenarios=("class_A",), estimators=("imm_synthetic",), duration_s=8.0,
-                    identification=ident, premise_runs_per_class=0)  # fmt: skip
+                    identification=ident, premise_runs_per_class=0, monitor_leak_runs=0,
+                    monitor_warning_runs=0)  # fmt: skip
     first = run_campaign(preset("quick", **settings), tmp_path, jobs=2)
     assert first["identification"]["classes_run"] == ["A", "B"]
     assert not (tmp_path / "premise.csv").exists()  # no premise check asked for

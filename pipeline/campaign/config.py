@@ -60,6 +60,12 @@ class CampaignConfig(BaseModel):
     chunk_size: int = Field(default=25, ge=1, le=1000)
     premise_runs_per_class: int = Field(default=25, ge=0, le=1000)
     """Runs per class A–D of paper 000's premise check (:mod:`suvtwin.pipeline.premise`); 0: none."""
+    monitor_leak_runs: int = Field(default=20, ge=0, le=1000)
+    """Slow-leak runs (one tyre 20 % down over 30 s, all four tyres monitored) of the online monitor's
+    study (:mod:`suvtwin.pipeline.monitor_scenarios`, set ``slow_leak``); 0: none."""
+    monitor_warning_runs: int = Field(default=100, ge=0, le=1000)
+    """Deflation-warning runs (one tyre or all four 20 % below placard) of the monitor's study (set
+    ``warning``); 0: none."""
 
     @model_validator(mode="after")
     def _known_names(self) -> CampaignConfig:
@@ -81,8 +87,9 @@ class CampaignConfig(BaseModel):
 
 
 def preset(name: str, **overrides) -> CampaignConfig:
-    """The ``quick`` (40 Monte Carlo runs, GA 100 × 100, premise check 6 runs per class) or ``full``
-    (paper scale: 100 runs, GA 100 × 1000, premise check 25 runs per class) campaign, with optional
+    """The ``quick`` (40 Monte Carlo runs, GA 100 × 100, premise check 6 runs per class, monitor study
+    2 slow leaks and 4 warning runs) or ``full`` (paper scale: 100 runs, GA 100 × 1000, premise check
+    25 runs per class, monitor study 20 slow leaks and 100 warning runs) campaign, with optional
     field overrides (e.g. ``monte_carlo_runs=40``)."""
     presets = {
         "quick": {
@@ -90,12 +97,16 @@ def preset(name: str, **overrides) -> CampaignConfig:
             "monte_carlo_runs": 40,
             "identification": {"pop_size": 100, "n_gen": 100},
             "premise_runs_per_class": 6,
+            "monitor_leak_runs": 2,
+            "monitor_warning_runs": 4,
         },
         "full": {
             "name": "full",
             "monte_carlo_runs": 100,
             "identification": {"pop_size": 100, "n_gen": 1000},
             "premise_runs_per_class": 25,
+            "monitor_leak_runs": 20,
+            "monitor_warning_runs": 100,
         },
     }
     if name not in presets:

@@ -276,6 +276,64 @@ def _premise(config: CampaignConfig, out: Path):
     return premise_summary(pd.read_csv(path)), made
 
 
+def _json_ready(obj):
+    """The monitor study as plain JSON: numpy scalars as Python numbers, NaN and inf as null."""
+    if isinstance(obj, dict):
+        return {str(k): _json_ready(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_json_ready(v) for v in obj]
+    if isinstance(obj, (bool, np.bool_)):
+        return bool(obj)
+    if isinstance(obj, (int, np.integer)):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
+        return float(obj) if np.isfinite(obj) else None
+    return obj
+
+
+def _monitor_study(config: CampaignConfig, out: Path, jobs: int) -> dict | None:
+    """The online monitor's study: the ``slow_leak`` and ``warning`` sets of
+    :mod:`suvtwin.pipeline.monitor_scenarios` (their own seeds, levels anywhere in the class band),
+    simulated into ``out/monitor/<set>/`` (cached by scenario and simulator code), all four tyres
+    monitored (the warning runs against their placard), scored by
+    :func:`suvtwin.pipeline.monitor_scoring.score_set` beside issue 12's targets. For each set also
+    one run's trace of its changed or deflated tyre, for the report's figure. None if no runs."""
+    sets = [("slow_leak", config.monitor_leak_runs), ("warning", config.monitor_warning_runs)]
+    if not any(n for _, n in sets):
+        return None
+    from suvtwin.pipeline.monitor_scenarios import monitor_traces, scenario_set, simulate_cached
+    from suvtwin.pipeline.monitor_scoring import issue_targets, score_set
+
+    study: dict = {}
+    for name, n in sets:
+        if n == 0:
+            continue
+        runs = scenario_set(name, n)
+        paths, simulation = simulate_cached(runs, out / "monitor" / name, jobs=jobs)
+        kept = [(r, p) for r, p in zip(runs, paths, strict=True) if p is not None]
+        traces, _, cost = monitor_traces([r for r, _ in kept], [p for _, p in kept], jobs=jobs)
+        done = [(r, t) for (r, _), t in zip(kept, traces, strict=True) if t is not None]
+        scores = score_set(name, [t for _, t in done], [r.info for r, _ in done])
+        example = None
+        if done:
+            run, trace = done[0]
+            tyre = run.info["change"]["tire"] if "change" in run.info else run.info["deflated"][0]
+            c = ("fl", "fr", "rl", "rr").index(tyre)
+            example = {"run": run.name, "tyre": tyre, "t_s": trace.t_s[::100].tolist(),
+                       "truth_kpa": trace.truth_kpa[::100, c].tolist(), "t_est_s": trace.t_est.tolist(),
+                       "p_hat_kpa": trace.p_hat[:, c].tolist(), "sigma_kpa": trace.sigma[:, c].tolist(),
+                       "warning": trace.warning[:, c].tolist(), "placard_kpa": run.placard_kpa}  # fmt: skip
+        study[name] = {
+            "scores": scores,
+            "targets": issue_targets(name, scores),
+            "simulation_failed": simulation.get("failed", {}),
+            "monitor_failed": cost["failed"],
+            "monitor_realtime_factor": cost["realtime_factor"],
+            "example": example,
+        }
+    return study
+
+
 def run_campaign(config: CampaignConfig, out: str | Path, *, jobs: int = 1, progress: bool = False) -> dict:
     """Run (or resume) the campaign in folder `out`; write metrics and the report there.
 
@@ -323,6 +381,15 @@ def run_campaign(config: CampaignConfig, out: str | Path, *, jobs: int = 1, prog
     else:  # none asked for: no premise.csv of an earlier configuration left beside these results
         (out / "premise.csv").unlink(missing_ok=True)
     timings["premise_s"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    monitor = _monitor_study(config, out, jobs)
+    if monitor is not None:
+        monitor = _json_ready(monitor)
+        text = json.dumps(monitor, indent=1)
+        atomic_write(out / "monitor.json", lambda tmp: Path(tmp).write_text(text))
+    else:
+        (out / "monitor.json").unlink(missing_ok=True)
+    timings["monitor_s"] = time.perf_counter() - t0
     summary = {
         "config": config.model_dump(mode="json"),
         "config_hash": digest(config.model_dump(mode="json")),
@@ -337,7 +404,7 @@ def run_campaign(config: CampaignConfig, out: str | Path, *, jobs: int = 1, prog
 
     t0 = time.perf_counter()
     write_report(out / "report.html", config, specs, metrics, mc_table, series, params_path, summary,
-                 premise=premise)  # fmt: skip
+                 premise=premise, monitor=monitor)  # fmt: skip
     timings["report_s"] = time.perf_counter() - t0
     timings["total_s"] = time.perf_counter() - started
     atomic_write(out / "campaign.json", lambda tmp: Path(tmp).write_text(json.dumps(summary, indent=2)))

@@ -16,7 +16,7 @@ import numpy as np
 
 from suvtwin.pipeline.estimator_registry import ESTIMATORS
 
-__all__ = ["draws_figure", "monte_carlo_figure", "road_psd_figure", "scenario_figure"]
+__all__ = ["draws_figure", "monitor_figure", "monte_carlo_figure", "road_psd_figure", "scenario_figure"]
 
 
 def _pyplot():
@@ -163,5 +163,33 @@ def draws_figure(specs: list) -> str:
     axes[1].set_ylabel("class")
     for ax in axes:
         ax.grid(alpha=0.3)
+    fig.tight_layout()
+    return _png(fig)
+
+
+def monitor_figure(example: dict, title: str) -> str:
+    """One monitored tyre: true pressure, the online estimate ± 2σ, and the warning (if any), kPa over s.
+
+    `example`: the campaign's monitor study example (``t_s``, ``truth_kpa``, ``t_est_s``,
+    ``p_hat_kpa``, ``sigma_kpa``, ``warning``, ``placard_kpa``)."""
+    plt = _pyplot()
+    color = ESTIMATORS["online"].color
+    fig, ax = plt.subplots(figsize=(9, 3.2))
+    t_est = np.asarray(example["t_est_s"], dtype=float)
+    p = np.asarray(example["p_hat_kpa"], dtype=float)
+    sigma = np.asarray(example["sigma_kpa"], dtype=float)
+    ax.plot(example["t_s"], example["truth_kpa"], color="k", lw=1.5, label="true pressure")
+    ax.step(t_est, p, where="post", color=color, label="online monitor")
+    ax.fill_between(t_est, p - 2 * sigma, p + 2 * sigma, step="post", color=color, alpha=0.2, label="± 2σ")
+    placard = example.get("placard_kpa")
+    if placard:
+        ax.axhline(0.8 * placard, color="tab:red", ls=":", lw=1, label="20 % below placard")
+    warned = np.flatnonzero(np.asarray(example["warning"], dtype=bool))
+    if warned.size:
+        ax.axvline(t_est[warned[0]], color="tab:red", lw=1, label=f"warning at {t_est[warned[0]]:.0f} s")
+    ax.set_xlabel("time, s")
+    ax.set_ylabel(f"pressure {example['tyre']}, kPa")
+    ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=8, loc="best")
     fig.tight_layout()
     return _png(fig)

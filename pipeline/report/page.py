@@ -186,6 +186,48 @@ def _premise_html(premise: pd.DataFrame, config) -> list[str]:
     return parts
 
 
+_MONITOR_SETS = {
+    "slow_leak": "Slow leak: one tyre loses 20 % over 30 s (from 10 s), the other three constant; 60 s runs",
+    "warning": "Deflation warning: one tyre, or all four, 20 % below the placard from the start; 60 s runs",
+}
+
+
+def _monitor_html(monitor: dict) -> list[str]:
+    """The section on the online monitor: issue 12's targets on its study sets, and one trace each."""
+    from suvtwin.pipeline.report.figures import monitor_figure
+
+    parts = [
+        "<h2>Online tyre-pressure monitor (ours): slow leaks and deflation warnings</h2>",
+        "<p>The causal four-corner monitor (<code>suvtwin monitor</code>) on MuJoCo runs of its own study "
+        "sets (road levels anywhere in the class band, loads 0–300 kg, 40–120 km/h; numbers in "
+        "<code>monitor.json</code>). Each target is issue 12's; one that falls short is reported as such.</p>",
+    ]
+    rows = []
+    for name, study in monitor.items():
+        for target, cell in study["targets"].items():
+            value = cell["value"]
+            rows.append({"set": name, "target": target, "value": "—" if value is None else value,
+                         "required": cell["target"], "met": "yes" if cell["met"] else "no"})  # fmt: skip
+    if rows:
+        parts.append(_table(pd.DataFrame(rows)))
+    for name, study in monitor.items():
+        scores = study["scores"]
+        parts.append(f"<p><b>{html.escape(_MONITOR_SETS.get(name, name))}</b>: {scores['runs']} runs.")
+        if name == "warning" and "warning" in scores:
+            w = scores["warning"]
+            share = w.get("detected")
+            parts.append(" Runs whose deflated tyres were all warned within 60 s of driving: "
+                         + ("—" if share is None else f"{100 * share:.0f} %") + ".")  # fmt: skip
+        parts.append("</p>")
+        failed = {**study.get("simulation_failed", {}), **study.get("monitor_failed", {})}
+        if failed:
+            parts.append(f"<p>Left out (simulation or monitor failed): {html.escape(', '.join(failed))}.</p>")
+        if study.get("example"):
+            title = f"{name}: run {study['example']['run']}, tyre {study['example']['tyre']}"
+            parts.append(_img(monitor_figure(study["example"], title), title))
+    return parts
+
+
 def write_report(
     path: str | Path,
     config,
@@ -197,9 +239,11 @@ def write_report(
     summary: dict,
     *,
     premise: pd.DataFrame | None = None,
+    monitor: dict | None = None,
 ) -> None:
     """Write the self-contained HTML report of a campaign (atomically); `premise`: the summary of
-    paper 000's premise check (:func:`suvtwin.pipeline.premise.premise_summary`), or None."""
+    paper 000's premise check (:func:`suvtwin.pipeline.premise.premise_summary`), or None;
+    `monitor`: the online monitor's study (``monitor.json``), or None."""
     from suvtwin.estimators.tire_pressure import PAPER_TABLE_3
     from suvtwin.mjcf.vehicle import load_vehicle
 
@@ -394,6 +438,9 @@ def write_report(
         agg["estimator"] = agg["estimator"].map(LABELS)
         parts.append("<p>Monte Carlo runs by road class (error = estimate − truth at the end):</p>")
         parts.append(_table(agg))
+
+    if monitor:
+        parts.extend(_monitor_html(monitor))
 
     parts.append("<h2>8. Reproduce</h2>")
     timings = summary.get("timings", {})
