@@ -5,55 +5,62 @@ Usual call::
     mon = TyreMonitor(corner_models, dt=1e-3)
     for chunk in stream:                       # any chunk length, in time order
         out = mon.update(chunk.t_s, chunk.speed_mps, chunk.acc_sprung, chunk.acc_unsprung)
-        out.pressure_pa, out.pressure_sigma_pa, out.observable   # one row per finished segment
+        out.pressure_pa, out.pressure_sigma_pa, out.observable   # one row per update
 
 What it estimates (the model is :mod:`suvtwin.estimators.joint`'s, made causal and recursive):
-each tyre's vertical stiffness k_t and pressure (eq. 3–4 of Brancati & Tufano 2022) with σ, and
-the road's roughness level :math:`G_d(n_0)` and waviness w that all four corners share. Each
-corner is the linear roll-plane corner model (:class:`~suvtwin.estimators.joint.LinearQuarterCar`)
-driven by an ISO 8608 road; the likelihood is Whittle's [1]_, projected on the road-driven
-direction of the corner's two accelerations (see the joint estimator).
+each tyre's vertical stiffness k_t and pressure (eq. 3–4 of Brancati & Tufano 2022 [3]_) with σ,
+each corner's road level :math:`G_d(n_0)` and waviness w, and the road's, pooled over the corners.
+Each corner is the linear roll-plane corner model
+(:class:`~suvtwin.estimators.joint.LinearQuarterCar`) driven by an ISO 8608 road; the likelihood
+is Whittle's [1]_, projected on the road-driven direction of the corner's two accelerations (see
+the joint estimator). The corners are estimated independently: tying their level and slope
+together lowers the ideal Cramér–Rao bound a little (``bench/monitor_bound.py``), but on the
+MuJoCo SUV it turned each corner model's small gain error into a k_t error of the other corners
+and made every tyre worse (README, "Online tyre-pressure monitor").
 
-How it runs, per segment of ``segment_s`` seconds (non-overlapping, rectangular window,
-linear detrend):
+How it runs, every ``update_s`` seconds on the last ``segment_s`` of data (a sliding window,
+rectangular, linear detrend; above ``merge_above_hz`` the periodogram is averaged in bands of
+``merge_width_hz``):
 
-1. **Checks.** Per corner, a segment with a missing value, a saturated (flat-topped) or
-   implausible accelerometer, or a spike is skipped; so is a segment whose speed is not
+1. **Checks.** Per corner, a window with a missing value, a saturated (flat-topped) or
+   implausible accelerometer, or a spike is skipped; so is a window whose speed is not
    finite, negative or changes by more than ``max_speed_change`` within it, and one at a
    speed whose spectral band (``band_cycles_per_m`` times the speed) stops below
    ``hop_margin`` times the corner's wheel-hop frequency: there k_t barely changes the
-   spectrum (the Cramér–Rao bound at 25 km/h is ~60 kPa after 10 s), so the segment is not
+   spectrum (the Cramér–Rao bound at 25 km/h is ~60 kPa after 10 s), so the window is not
    used for k_t. Each skip is counted, by reason, in the output; nothing is fatal.
-2. **Sufficient statistics with forgetting.** Each used segment's 2×2 cross-periodogram
-   of (sprung, unsprung) acceleration is added to accumulators binned by speed (bins
-   ``speed_bin_ratio`` wide: the road-velocity PSD and the band scale with speed). Every
-   accumulator decays as :math:`e^{-\Delta t/\tau}` in time: a weighted likelihood whose
-   weights halve every τ ln 2 seconds. The state is these accumulators: its size is fixed
-   by the frequency grid, the speed bins and the corners, so the cost per second of data is
-   the same after 10 s and after 10 h.
-3. **Estimates per memory.** For each memory τ in ``memories_s`` the parameters
-   (log level λ, waviness slope β = 2 − w, one pressure per corner) maximize the weighted
-   Whittle likelihood by Fisher scoring, warm-started; the corner damping (a digressive
-   damper's equivalent linear damping) is marginalized over ``damping_points`` values of its
-   range, and the waviness has the joint estimator's spike-and-slab prior (w = 2 with
-   probability ``waviness_iso_weight``). σ comes from the inverse Fisher information of all
-   parameters together (the shared level's uncertainty included), corrected by the
-   sandwich factor of a weighted likelihood, :math:`\sum w_k^2/\sum w_k`, which makes it the
-   error std of the estimate under a constant pressure rather than the conservative
+2. **Sufficient statistics with forgetting.** Each used window's 2×2 cross-periodogram of
+   (sprung, unsprung) acceleration, weighted by update_s/segment_s (each sample lies in that
+   many windows), is added to accumulators binned by speed (bins ``speed_bin_ratio`` wide: the
+   road-velocity PSD and the band scale with speed). Every accumulator decays as
+   :math:`e^{-\Delta t/\tau}` in time: a weighted likelihood. The state is these accumulators
+   and the last ``change_window_s`` of windows: its size is fixed by the frequency grid, the
+   speed bins and the corners, so the cost per second of data is the same after 10 s and after
+   10 h (``bench/monitor_cost.py``).
+3. **Estimates per memory.** For each memory τ in ``memories_s`` and each corner, the log level,
+   the waviness slope β = 2 − w and the pressure maximize the weighted Whittle likelihood by
+   Fisher scoring, warm-started (all memories and corners in one compiled call); the corner
+   damping (a digressive damper's equivalent linear damping) is marginalized over
+   ``damping_points`` values of its range, and the waviness has the joint estimator's
+   spike-and-slab prior (w = 2 with probability ``waviness_iso_weight``). σ comes from the
+   inverse Fisher information of the corner's parameters together, corrected by the sandwich
+   factor of a weighted likelihood, :math:`\sum w_k^2/\sum w_k`, which makes it the error std
+   of the estimate under a constant pressure rather than the conservative
    :math:`(\sum w_k I)^{-1}`.
-4. **Choosing the memory (change detection).** Before a segment is added, each memory's
-   estimate predicts it: the score is the segment's Whittle log-likelihood at that memory's
-   parameters, less half the information it would add times the memory's variance (the
-   expected log predictive density, Gaussian approximation). Per corner, the scores are
-   summed with forgetting (``selection_s``) and the memories weighted by them (dynamic
-   model averaging [2]_): a long memory wins while the pressure is steady, a short one
-   while it changes, and the output is their mixture (mean and variance). When the shortest
-   memory's summed score exceeds a longer memory's by ``change_nats`` (a likelihood ratio
-   test between "changed recently" and "steady"), that longer memory of that corner is
-   restarted from the shortest one's statistics: after an abrupt change the memory is cut
-   to the data since the change, not left to fade. The constants (4, 16, 64 s; 10 s; 3
-   nats) are justified by the leak and drop benchmarks (README, "Benchmarks").
-5. **Observability.** A corner whose σ exceeds ``observable_sigma_kpa`` (no usable data in
+4. **Choosing the memory.** Before a window is added, each memory's estimate predicts the
+   newest ``update_s`` of data: the score is its Whittle log-likelihood at that memory's
+   parameters, less half the information it carries times the memory's variance (the expected
+   log predictive density, Gaussian approximation). Per corner, the scores are summed with
+   forgetting (``selection_s``) and the memories weighted by them (dynamic model averaging
+   [2]_): a long memory wins while the pressure is steady, a short one while it changes; the
+   output is their mixture (mean and variance).
+5. **Change detection.** A generalized likelihood ratio test [4]_ looks for a step in each
+   tyre's pressure within the last ``change_window_s``: the windows' scores and information in
+   p at the longest memory's estimate, summed from each candidate start to now, give
+   GLR = U²/(2I); above ``change_nats`` every memory of that tyre is rebuilt from the windows
+   since the change's start, so after an abrupt change (or a change of road roughness, which
+   the test also sees) the memory is cut, not left to fade.
+6. **Observability.** A corner whose σ exceeds ``observable_sigma_kpa`` (no usable data in
    memory: low speed, flat road, faulty sensor) is flagged not observable; its estimate
    then relaxes to the prior (``prior_pressure_kpa`` ± ``prior_sigma_kpa``) as the memory
    fades, instead of holding an old value with a small σ.
@@ -127,6 +134,11 @@ class MonitorConfig:
         Spatial-frequency band used, cycles/m (times the speed: Hz).
     max_frequency_hz : float
         Upper limit of the band, Hz.
+    merge_above_hz, merge_width_hz : float
+        Above `merge_above_hz` the periodogram's neighbouring frequencies are averaged in bands
+        about `merge_width_hz` wide (Whittle's likelihood of a band-averaged periodogram, each band
+        weighted by the frequencies it holds): the spectra there are smooth on that scale, and
+        the cost falls about threefold.
     sigma_accel : float
         Accelerometer noise std (each channel), m/s².
     pressure_range_kpa : (float, float)
@@ -157,13 +169,15 @@ class MonitorConfig:
     """
 
     segment_s: float = 8.0
-    update_s: float = 2.0
+    update_s: float = 4.0
     memories_s: tuple[float, ...] = (4.0, 16.0, 64.0)
     selection_s: float = 10.0
     change_nats: float = 5.0
     change_window_s: float = 30.0
     band_cycles_per_m: tuple[float, float] = (0.05, 1.5)
     max_frequency_hz: float = 30.0
+    merge_above_hz: float = 3.0
+    merge_width_hz: float = 0.5
     sigma_accel: float = 0.5
     pressure_range_kpa: tuple[float, float] = (60.0, 400.0)
     prior_pressure_kpa: float | None = None
@@ -204,6 +218,8 @@ class MonitorConfig:
                 "0 < low < high",
             ),
             ("max_frequency_hz", self.max_frequency_hz > 0, "> 0"),
+            ("merge_above_hz", self.merge_above_hz >= 0, "≥ 0"),
+            ("merge_width_hz", 0 < self.merge_width_hz <= 5.0, "(0, 5] Hz"),
             ("sigma_accel", self.sigma_accel > 0, "> 0"),
             (
                 "pressure_range_kpa",
@@ -262,10 +278,11 @@ class MonitorUpdate:
 
 
 @cached_njit
-def _corner_terms(lam, beta, p_kpa, log_gain, dlog_gain, p_lo, p_step, proj, weight, x, log_cv):
+def _corner_terms(lam, beta, p_kpa, table, log_gain, dlog_gain, p_lo, p_step, proj, weight, x, log_cv):
     """Whittle log-likelihood, score and Fisher information per (corner, damping) in (λ_c, β, p).
 
-    `lam`, `beta` (C,): each corner's log level and slope. r = exp(λ_c + β_c x + log_cv + log g(p));
+    `lam`, `beta` (C,): each row's log level and slope; `table` (C,): which corner's gain table a row
+    uses (rows may be memories × corners). r = exp(λ_c + β_c x + log_cv + log g(p));
     ℓ = −Σ w [log(1 + r) + P/(1 + r)];
     ∂ℓ/∂θ = Σ w q (P/(1+r) − 1) ∂log r/∂θ, I = Σ w q² (∂log r)(∂log r)ᵀ, q = r/(1 + r).
     `log_gain` (C, D, P, F): log(|h|²/N) on the pressure grid p_lo + i·p_step (kPa), linearly
@@ -290,8 +307,9 @@ def _corner_terms(lam, beta, p_kpa, log_gain, dlog_gain, p_lo, p_step, proj, wei
                     wf = weight[c, b, j]
                     if wf == 0.0:
                         continue
-                    lg = (1.0 - a) * log_gain[c, d, i, j] + a * log_gain[c, d, i + 1, j]
-                    dl = (1.0 - a) * dlog_gain[c, d, i, j] + a * dlog_gain[c, d, i + 1, j]
+                    g = table[c]
+                    lg = (1.0 - a) * log_gain[g, d, i, j] + a * log_gain[g, d, i + 1, j]
+                    dl = (1.0 - a) * dlog_gain[g, d, i, j] + a * dlog_gain[g, d, i + 1, j]
                     xf = x[b, j]
                     r = np.exp(lam[c] + beta[c] * xf + log_cv[b] + lg)
                     inv = 1.0 / (1.0 + r)
@@ -323,6 +341,7 @@ def _newton_kernel(
     lam,
     beta,
     p,
+    table,
     log_gain,
     dlog_gain,
     grid_lo,
@@ -348,15 +367,16 @@ def _newton_kernel(
     kPa). Each pressure takes its conditional step given (λ_c, β_c); then (λ_c, β_c) take the
     Newton step of their profile likelihood (the pressures' information Schur-complemented out,
     damping-weighted). Steps are clipped (30 kPa, 2 in λ, 0.5 in β) and kept in their ranges; at
-    most `iterations` steps, fewer once below 1e-4. `lam`, `beta` (C,) and `p` (C, D) are updated
-    in place. Returns the damping weights (C, D) (Laplace marginal over p), and ℓ (C, D),
-    score (C, D, 3), information (C, D, 3, 3) at the last point, the pressure prior included."""
+    most `iterations` steps, fewer once below 1e-3 (0.1 kPa, 0.001 in λ and β). `lam`, `beta` (C,)
+    and `p` (C, D) are updated in place. Returns the damping weights (C, D) (Laplace marginal over
+    p), and ℓ (C, D), score (C, D, 3), information (C, D, 3, 3) at the last point, the pressure
+    prior included."""
     n_c, n_d = p.shape
     wd = np.empty((n_c, n_d))
     it = 0
     while True:
         ll, score, info = _corner_terms(
-            lam, beta, p, log_gain, dlog_gain, grid_lo, grid_step, proj, weight, x, log_cv
+            lam, beta, p, table, log_gain, dlog_gain, grid_lo, grid_step, proj, weight, x, log_cv
         )
         for c in range(n_c):
             top = -1e300
@@ -404,7 +424,7 @@ def _newton_kernel(
             moved = max(moved, abs(new_l - lam[c]))
             lam[c] = new_l
         it += 1
-        if moved < 1e-4:
+        if moved < 1e-3:
             iterations = it  # evaluate once more at the converged point
     return wd, ll, score, info
 
@@ -453,6 +473,9 @@ class _State:
     recent_weight: np.ndarray  # (K, C) their weights (0: not used)
     recent_speed: np.ndarray  # (K,) their speeds, m/s
     recent_t: np.ndarray  # (K,) their end times, s
+    recent_u: np.ndarray  # (K, C) each window's score in p (1/kPa) at the longest memory's estimate then
+    recent_i: np.ndarray  # (K, C) its information in p (1/kPa²)
+    recent_p: np.ndarray  # (K, C) the pressure it was taken at, kPa
     in_window: int = 0  # samples at the buffer's start that belong to the last window
     last_t: float = math.nan  # time of the last sample received
     last_segment_t: float = math.nan  # time of the last finished segment
@@ -504,7 +527,20 @@ class TyreMonitor:
             raise InputError(f"update_s = {cfg.update_s} s holds fewer than 32 samples at dt = {dt} s")
         freq = np.fft.rfftfreq(self.window, dt)
         self._f_index = np.flatnonzero((freq > 0) & (freq <= cfg.max_frequency_hz))
-        self.freq = freq[self._f_index]
+        fine = freq[self._f_index]
+        # bands: single frequencies below merge_above_hz, groups of ~merge_width_hz above
+        per_group = max(int(round(cfg.merge_width_hz * cfg.segment_s)), 1)
+        group = np.where(fine <= cfg.merge_above_hz, np.arange(fine.size), 0)
+        above = fine > cfg.merge_above_hz
+        first_above = int(np.argmax(above)) if np.any(above) else fine.size
+        n_single = first_above
+        group[above] = n_single + (np.arange(fine.size - first_above) // per_group)
+        self._group_start = np.flatnonzero(np.r_[True, np.diff(group) != 0])  # reduceat offsets
+        self._group_size = np.diff(np.r_[self._group_start, fine.size]).astype(float)
+        self._fine_freq = fine
+        # an update block's own Fourier frequency nearest each window frequency
+        self._block_index = np.rint(fine * self.hop * dt).astype(int)
+        self.freq = np.add.reduceat(fine, self._group_start) / self._group_size
         if self.freq.size < 4:
             raise InputError("the frequency band holds fewer than 4 Fourier frequencies; lengthen segment_s")
         self.noise = 2.0 * cfg.sigma_accel**2 * dt  # one-sided white-noise PSD, (m/s²)²/Hz
@@ -531,12 +567,14 @@ class TyreMonitor:
             self.dampings[c] = cs
             for d, cd in enumerate(cs):
                 model = replace(qc, damping=float(cd))
-                g = signal_gain(self.freq[None, :], kt[:, None], model) / self.noise
+                g = signal_gain(fine[None, :], kt[:, None], model) / self.noise  # the band's mean gain
+                g = np.add.reduceat(g, self._group_start, axis=1) / self._group_size
                 self._log_gain[c, d] = np.log(np.maximum(g, 1e-300))
                 self._u[c, d] = np.stack(signal_direction(self.freq, model))
             kt_nom = stiffness_from_pressure(self.tires[c].p0, **law)
             self._hop_hz[c] = math.sqrt((qc.spring_rate + kt_nom) / qc.unsprung_mass) / (2.0 * math.pi)
         self._dlog_gain = np.gradient(self._log_gain, self._p_step, axis=2)
+        self._tables = np.arange(n_c)  # row c of the kernels uses corner c's tables
         # u^H S u = |u1|² S11 + |u2|² S22 + 2 Re(conj(u1) u2 S12), each term (C, D, 1, F)
         self._u11 = (np.abs(self._u[:, :, 0]) ** 2)[:, :, None, :] / self.noise
         self._u22 = (np.abs(self._u[:, :, 1]) ** 2)[:, :, None, :] / self.noise
@@ -579,6 +617,9 @@ class TyreMonitor:
             recent_weight=np.zeros((self._n_recent, n_c)),
             recent_speed=np.full(self._n_recent, np.nan),
             recent_t=np.full(self._n_recent, np.nan),
+            recent_u=np.zeros((self._n_recent, n_c)),
+            recent_i=np.zeros((self._n_recent, n_c)),
+            recent_p=np.zeros((self._n_recent, n_c)),
             counts={
                 "segments": 0, **{r: np.zeros(n_c, dtype=int) for r in SKIP_REASONS},
                 "restarts": np.zeros(n_c, dtype=int),
@@ -603,6 +644,9 @@ class TyreMonitor:
             s.recent_weight,
             s.recent_speed,
             s.recent_t,
+            s.recent_u,
+            s.recent_i,
+            s.recent_p,
         ]
         return int(sum(a.nbytes for a in arrays))
 
@@ -705,11 +749,13 @@ class TyreMonitor:
         n_c = len(self.models)
         status = np.zeros(n_c, dtype=np.int8)
         x = np.concatenate([a_s.T, a_u.T])  # (2C, m): sprung rows, then unsprung rows
-        finite = np.all(np.isfinite(x), axis=1)
-        xf = np.where(finite[:, None], x, 0.0)
-        implausible = np.any(np.abs(xf) > cfg.max_accel_mps2, axis=1) | (np.ptp(xf, axis=1) == 0.0)
-        clipped = _clipped(xf, cfg.accel_range_mps2)
-        spiky = _spiky(xf, cfg.spike_z)
+        top, bottom = x.max(axis=1), x.min(axis=1)  # NaN where a sample is missing
+        finite = np.isfinite(top) & np.isfinite(bottom)
+        xf = np.where(finite[:, None], x, 0.0) if not np.all(finite) else x
+        top, bottom = np.where(finite, top, 0.0), np.where(finite, bottom, 0.0)
+        implausible = (np.maximum(top, -bottom) > cfg.max_accel_mps2) | (top == bottom)
+        clipped = _clipped(xf, top, bottom, cfg.accel_range_mps2)
+        spiky = _spiky(xf, top, bottom, cfg.spike_z)
         for c in range(n_c):
             rows = [c, n_c + c]
             if not np.all(finite[rows]):
@@ -759,7 +805,7 @@ class TyreMonitor:
             spec = self._cross_spectra(a_s[:, used], a_u[:, used])  # (Cu, F, 3)
             b = self._speed_bin(speed)
             # 1. predictive scores of the memories for the new block (before it is added)
-            newest = self._cross_spectra(block[2][:, used], block[3][:, used])
+            newest = self._cross_spectra(block[2][:, used], block[3][:, used], own_grid=True)
             scores = self._predictive_scores(newest, used, speed, share)  # (C, M), 0 where not used
             decay = math.exp(-elapsed / cfg.selection_s)
             s.score = decay * s.score + scores
@@ -776,10 +822,13 @@ class TyreMonitor:
             s.recent_spec = np.roll(s.recent_spec, -1, axis=0)
             s.recent_weight = np.roll(s.recent_weight, -1, axis=0)
             s.recent_speed, s.recent_t = np.roll(s.recent_speed, -1), np.roll(s.recent_t, -1)
+            s.recent_u, s.recent_i = np.roll(s.recent_u, -1, axis=0), np.roll(s.recent_i, -1, axis=0)
+            s.recent_p = np.roll(s.recent_p, -1, axis=0)
             s.recent_spec[-1] = 0.0
             s.recent_spec[-1, used] = w * spec
             s.recent_weight[-1] = np.where(used, w, 0.0)
             s.recent_speed[-1], s.recent_t[-1] = speed, t_end
+            s.recent_u[-1], s.recent_i[-1], s.recent_p[-1] = self._window_score(spec, used, speed, w)
             start = self._change_test(used)
             for c in np.flatnonzero(start >= 0):
                 self._rebuild(c, int(start[c]), t_end)
@@ -787,8 +836,7 @@ class TyreMonitor:
             s.counts["restarts"] += restarts
         else:
             self._forget(elapsed)  # time passes: memories fade
-        for m in range(n_m):
-            s.fits[m] = self._fit(m, s.fits[m])
+        s.fits = self._fit_all(s.fits)
         return self._output(t_end, speed, status, restarts)
 
     def _speed_bin(self, speed: float) -> int:
@@ -812,35 +860,45 @@ class TyreMonitor:
         fit = s.fits[-1]
         if fit is None or not fit.has_data or not np.any(used):
             return out
-        v = np.argmax(fit.variant_weight, axis=1)
         pick = np.arange(n_c)
-        lam, beta = np.ascontiguousarray(fit.lam[v, pick]), np.ascontiguousarray(fit.beta[v, pick])
-        lam = np.where(np.isfinite(lam), lam, math.log(1e-5))
-        p, wd = np.ascontiguousarray(fit.p[v, pick]), fit.wd[v, pick]
-        n_k = s.recent_t.size
-        u = np.zeros((n_k, n_c))
-        info = np.zeros((n_k, n_c))
-        for k in range(n_k):
-            wk = s.recent_weight[k]
-            if not np.any(wk > 0):
-                continue
-            mask, x, log_cv = self._band(np.array([s.recent_speed[k]]))
-            proj = self._project(s.recent_spec[k][:, None] / np.maximum(wk, 1e-300)[:, None, None, None])
-            weight = wk[:, None, None] * mask[None]
-            _, score, inf = _corner_terms(
-                lam, beta, p, self._log_gain, self._dlog_gain, float(self._p_grid[0]), self._p_step, proj,
-                weight, x, log_cv,
-            )  # fmt: skip
-            u[k] = np.einsum("cd,cd->c", wd, score[..., 2])
-            info[k] = np.einsum("cd,cd->c", wd, inf[..., 2, 2])
+        # each window's score moved to the memory's present estimate (the score is linear in p near it)
+        p_now = fit.p_mean[None, :]
+        u = np.where(s.recent_i > 0, s.recent_u - s.recent_i * (p_now - s.recent_p), 0.0)
+        info = s.recent_i
         total_u = np.cumsum(u[::-1], axis=0)[::-1]  # from window j to the newest
         total_i = np.cumsum(info[::-1], axis=0)[::-1]
-        n_after = np.cumsum(s.recent_weight[::-1] > 0, axis=0)[::-1]
+        n_after = np.cumsum(info[::-1] > 0, axis=0)[::-1]
         glr = np.where((total_i > 0) & (n_after >= 2), total_u**2 / (2.0 * np.maximum(total_i, 1e-300)), 0.0)
         best = np.argmax(glr, axis=0)
         hit = (glr[best, pick] > self.config.change_nats) & used
         out[hit] = best[hit]
         return out
+
+    def _window_score(self, spec: np.ndarray, used: np.ndarray, speed: float, w: float):
+        """Score and information in p of one window (its corners `used`, weight `w`) at the longest
+        memory's estimate, and that estimate: three (C,) arrays (zero for corners not used)."""
+        s = self._state
+        n_c = len(self.models)
+        zeros = np.zeros(n_c)
+        fit = s.fits[-1]
+        if fit is None or not fit.has_data:
+            return zeros, zeros, zeros
+        v = np.argmax(fit.variant_weight, axis=1)
+        pick = np.arange(n_c)
+        lam = np.ascontiguousarray(fit.lam[v, pick])
+        lam = np.where(np.isfinite(lam), lam, math.log(1e-5))
+        full = np.zeros((n_c, 1, self.freq.size, 3), dtype=complex)
+        full[used, 0] = spec
+        weight, x, log_cv = self._band(np.array([speed]))
+        beta, p = np.ascontiguousarray(fit.beta[v, pick]), np.ascontiguousarray(fit.p[v, pick])
+        _, score, info = _corner_terms(
+            lam, beta, p, self._tables, self._log_gain, self._dlog_gain, float(self._p_grid[0]), self._p_step,
+            self._project(full), w * used[:, None, None] * weight[None], x, log_cv,
+        )  # fmt: skip
+        wd = fit.wd[v, pick]
+        u = np.einsum("cd,cd->c", wd, score[..., 2])
+        i = np.einsum("cd,cd->c", wd, info[..., 2, 2])
+        return u, i, np.where(used, fit.p_mean, 0.0)
 
     def _rebuild(self, c: int, start: int, t_end: float) -> None:
         """Corner c's memories from recent window `start` on only (each memory cut at the change);
@@ -865,6 +923,7 @@ class TyreMonitor:
                 s.speed_sum[m, c, b] += rho * w * s.recent_speed[j] / k
         s.recent_weight[:start, c] = 0.0
         s.recent_spec[:start, c] = 0.0
+        s.recent_u[:, c] = s.recent_i[:, c] = 0.0  # the change test starts afresh for this corner
         s.score[c] = 0.0  # the memories hold the same data now: equal weights
 
     def _forget(self, elapsed: float) -> None:
@@ -880,33 +939,43 @@ class TyreMonitor:
                 s.speed_sum[m] *= k
                 s.scale[m] = 1.0
 
-    def _cross_spectra(self, a_s: np.ndarray, a_u: np.ndarray) -> np.ndarray:
+    def _cross_spectra(self, a_s: np.ndarray, a_u: np.ndarray, *, own_grid: bool = False) -> np.ndarray:
         """One-sided cross-periodogram per Hz of (sprung, unsprung) on the window's frequencies, (C, F, 3):
         S11, S22, S12. Linear detrend, rectangular window; fewer samples than a window are
-        zero-padded to it (the periodogram of the data there, sampled on the window's grid)."""
+        zero-padded to it (the periodogram of the data there, sampled on the window's grid), or with
+        `own_grid` (one update's block) taken on their own grid and each window frequency given
+        the value of the nearest one (half the cost; used for the memories' predictive scores)."""
         x = _detrend(np.stack([a_s.T, a_u.T]))  # (2, C, n)
-        X = np.fft.rfft(x, n=self.window, axis=-1)[..., self._f_index]
+        if own_grid and x.shape[-1] == self.hop:
+            X = np.fft.rfft(x, axis=-1)[..., self._block_index]
+        else:
+            X = np.fft.rfft(x, n=self.window, axis=-1)[..., self._f_index]
         k = 2.0 * self.dt / x.shape[-1]
-        out = np.empty(X.shape[1:] + (3,), dtype=complex)
-        out[..., 0] = np.abs(X[0]) ** 2 * k
-        out[..., 1] = np.abs(X[1]) ** 2 * k
-        out[..., 2] = X[0] * np.conj(X[1]) * k
-        return out
+        fine = np.empty(X.shape[1:] + (3,), dtype=complex)
+        fine[..., 0] = np.abs(X[0]) ** 2 * k
+        fine[..., 1] = np.abs(X[1]) ** 2 * k
+        fine[..., 2] = X[0] * np.conj(X[1]) * k
+        return np.add.reduceat(fine, self._group_start, axis=1) / self._group_size[:, None]
 
-    def _project(self, spec: np.ndarray) -> np.ndarray:
-        """u^H S u / N for each damping: spec (C, B, F, 3) → (C, D, B, F)."""
+    def _project(self, spec: np.ndarray, table: np.ndarray | None = None) -> np.ndarray:
+        """u^H S u / N for each damping: spec (R, B, F, 3) → (R, D, B, F); row r is corner `table[r]`
+        (default: row c is corner c)."""
         sp = spec[:, None]
-        return self._u11 * sp[..., 0].real + self._u22 * sp[..., 1].real + (self._u12 * sp[..., 2]).real
+        u11, u22, u12 = (self._u11, self._u22, self._u12) if table is None else (
+            self._u11[table], self._u22[table], self._u12[table])  # fmt: skip
+        return u11 * sp[..., 0].real + u22 * sp[..., 1].real + (u12 * sp[..., 2]).real
 
     def _band(self, speeds: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Band mask (B, F), log(n/n0) (B, F) and log(4π² n0² v) (B,) at the bins' speeds."""
+        """Band weights (B, F: the number of Fourier frequencies averaged, 0 outside the band), log(n/n0)
+        (B, F) and log(4π² n0² v) (B,) at the bins' speeds."""
         cfg = self.config
         f = self.freq[None, :]
         v = speeds[:, None]
         mask = (f >= cfg.band_cycles_per_m[0] * v) & (
             f <= np.minimum(cfg.band_cycles_per_m[1] * v, cfg.max_frequency_hz)
         )
-        return mask.astype(float), np.log(f / (N0 * v)), np.log(4.0 * np.pi**2 * N0**2 * speeds)
+        weight = mask * self._group_size[None, :]  # a band counts for the frequencies it averages
+        return weight, np.log(f / (N0 * v)), np.log(4.0 * np.pi**2 * N0**2 * speeds)
 
     def _predictive_scores(
         self, spec: np.ndarray, used: np.ndarray, speed: float, share: float
@@ -931,8 +1000,8 @@ class TyreMonitor:
             pick = np.arange(n_c)
             ll, _, info = _corner_terms(
                 np.ascontiguousarray(fit.lam[v, pick]), np.ascontiguousarray(fit.beta[v, pick]),
-                np.ascontiguousarray(fit.p[v, pick]), self._log_gain, self._dlog_gain, float(self._p_grid[0]),
-                self._p_step, proj, weight, x, log_cv,
+                np.ascontiguousarray(fit.p[v, pick]), self._tables, self._log_gain, self._dlog_gain,
+                float(self._p_grid[0]), self._p_step, proj, weight, x, log_cv,
             )  # fmt: skip
             wd = fit.wd[v, pick]
             plug_in = _logsumexp(ll + np.log(np.maximum(wd, 1e-300)), axis=1)
@@ -942,79 +1011,95 @@ class TyreMonitor:
         return out
 
     # ------------------------------------------------------------------ estimation
-    def _fit(self, m: int, previous: _Fit | None) -> _Fit:
-        """Fisher scoring of memory m's weighted likelihood (warm-started from `previous`)."""
+    def _empty_fit(self) -> _Fit:
+        """A memory with no data: the prior."""
+        n_c, n_d = len(self.models), self.config.damping_points
+        n_v = 2 if self._slope_free else 1
+        nan = np.full(n_c, np.nan)
+        return _Fit(
+            lam=np.full((n_v, n_c), np.nan), beta=np.zeros((n_v, n_c)),
+            p=np.broadcast_to(self._prior[:, None], (n_v, n_c, n_d)).copy(),
+            wd=np.full((n_v, n_c, n_d), 1.0 / n_d),
+            variant_weight=np.tile(np.eye(n_v)[0], (n_c, 1)), p_mean=self._prior.copy(),
+            p_var=np.full(n_c, self._prior_var), lam_mean=nan, lam_var=np.full(n_c, np.inf),
+            beta_mean=np.zeros(n_c), beta_var=np.full(n_c, np.inf), has_data=False,
+        )  # fmt: skip
+
+    def _fit_all(self, previous: list) -> list:
+        """Fisher scoring of every memory's weighted likelihood, warm-started from `previous`.
+
+        The memories' corners are independent rows of one kernel call per slope model (memory m,
+        corner c → row m·C + c), so the cost of Python is paid once per update, not per memory."""
         cfg = self.config
         s = self._state
-        n_c, n_d = len(self.models), cfg.damping_points
-        scale = s.scale[m]
-        W = s.weight[m] * scale  # (C, NB) Σ w_k
-        bins = np.flatnonzero(W.sum(axis=0) > 1e-9)
-        prior = np.repeat(self._prior[:, None], n_d, axis=1)
+        n_m, n_c, n_d = len(cfg.memories_s), len(self.models), cfg.damping_points
         n_v = 2 if self._slope_free else 1
+        W = s.weight * s.scale[:, None, None]  # (M, C, NB) Σ w_k
+        has_data = W.sum(axis=(1, 2)) > 1e-9
+        bins = np.flatnonzero(W.sum(axis=(0, 1)) > 1e-9)
         if bins.size == 0:
-            nan = np.full(n_c, np.nan)
-            return _Fit(
-                lam=np.full((n_v, n_c), np.nan), beta=np.zeros((n_v, n_c)),
-                p=np.broadcast_to(prior, (n_v, n_c, n_d)).copy(), wd=np.full((n_v, n_c, n_d), 1.0 / n_d),
-                variant_weight=np.tile(np.eye(n_v)[0], (n_c, 1)), p_mean=self._prior.copy(),
-                p_var=np.full(n_c, self._prior_var), lam_mean=nan, lam_var=np.full(n_c, np.inf),
-                beta_mean=np.zeros(n_c), beta_var=np.full(n_c, np.inf), has_data=False,
-            )  # fmt: skip
-        Wb = W[:, bins]  # (C, B)
-        stored = s.weight[m][:, bins]
-        speeds = s.speed_sum[m][:, bins].sum(axis=0) / stored.sum(axis=0)
-        mask, x, log_cv = self._band(speeds)
-        mean_spec = s.spec[m][:, bins] / np.maximum(stored, 1e-300)[..., None, None]
-        proj = self._project(mean_spec)  # (C, D, B, F)
-        weight = Wb[:, :, None] * mask[None]  # (C, B, F)
-        total = W.sum(axis=1)
-        eff = s.weight2[m].sum(axis=1) * scale**2 / np.maximum(total, 1e-300)  # sandwich factor per corner
-        eff = np.where(total > 1e-9, np.minimum(eff, 1.0), 1.0)
-        if previous is None or not previous.has_data:
-            lam0, p0 = self._cold_start(proj, weight, log_cv)
-            starts = [(lam0, np.zeros(n_c), p0)] * n_v
-            iterations = 30
-        else:
-            starts = []
-            for v in range(n_v):
-                lam = previous.lam[v].copy()
-                lam[~np.isfinite(lam)] = np.nanmean(lam) if np.any(np.isfinite(lam)) else math.log(1e-5)
-                starts.append((lam, previous.beta[v], previous.p[v]))
-            iterations = 6
+            return [self._empty_fit() for _ in range(n_m)]
+        rows = n_m * n_c
+        Wb = W[:, :, bins]  # (M, C, B)
+        speeds = (s.speed_sum[:, :, bins] * s.scale[:, None, None]).sum(axis=(0, 1)) / Wb.sum(axis=(0, 1))
+        band, x, log_cv = self._band(speeds)
+        stored = s.weight[:, :, bins]
+        mean_spec = s.spec[:, :, bins] / np.maximum(stored, 1e-300)[..., None, None]
+        table = np.tile(np.arange(n_c), n_m)
+        proj = self._project(mean_spec.reshape(rows, bins.size, self.freq.size, 3), table)  # (rows, D, B, F)
+        weight = Wb.reshape(rows, bins.size)[:, :, None] * band[None]  # (rows, B, F)
+        total = W.sum(axis=2).reshape(rows)
+        eff = (s.weight2.sum(axis=2) * s.scale[:, None] ** 2).reshape(rows) / np.maximum(total, 1e-300)
+        eff = np.where(total > 1e-9, np.minimum(eff, 1.0), 1.0)  # sandwich factor per row
+        prior_rows = np.tile(self._prior, n_m)
+        prior = np.repeat(prior_rows[:, None], n_d, axis=1)
+        lam0 = np.empty((n_v, rows))
+        beta0 = np.zeros((n_v, rows))
+        p0 = np.empty((n_v, rows, n_d))
+        cold = [m for m in range(n_m) if previous[m] is None or not previous[m].has_data]
+        if cold:
+            rows_cold = np.concatenate([np.arange(m * n_c, (m + 1) * n_c) for m in cold])
+            lam_c, p_c = self._cold_start(proj[rows_cold], weight[rows_cold], log_cv, table[rows_cold])
+            lam0[:, rows_cold], p0[:, rows_cold] = lam_c, p_c
+        for m in range(n_m):
+            if m in cold:
+                continue
+            sl = slice(m * n_c, (m + 1) * n_c)
+            lam = previous[m].lam.copy()
+            finite = np.isfinite(lam)
+            lam[~finite] = np.mean(lam[finite]) if np.any(finite) else math.log(1e-5)
+            lam0[:, sl], beta0[:, sl], p0[:, sl] = lam, previous[m].beta, previous[m].p
+        iterations = 30 if cold else 6
         fits = []
         for v in range(n_v):
-            lam, beta, p = (np.ascontiguousarray(a, dtype=float).copy() for a in starts[v])
+            lam, beta, p = (np.ascontiguousarray(a[v], dtype=float).copy() for a in (lam0, beta0, p0))
             wd, ll, _, info = _newton_kernel(
-                v, lam, beta, p, self._log_gain, self._dlog_gain, float(self._p_grid[0]), self._p_step, proj,
-                weight, x, log_cv, self._prior, self._prior_var, *cfg.pressure_range_kpa, *_LEVEL_BOUNDS,
+                v, lam, beta, p, table, self._log_gain, self._dlog_gain, float(self._p_grid[0]), self._p_step,
+                proj, weight, x, log_cv, prior_rows, self._prior_var, *cfg.pressure_range_kpa, *_LEVEL_BOUNDS,
                 *self._beta_bounds, iterations,
             )  # fmt: skip
-            # per corner, the covariance of (λ_c, [β_c], p_c) from the damping-weighted information
+            # per row, the covariance of (λ_c, [β_c], p_c) from the damping-weighted information
             keep = [0, 1, 2] if v == 1 else [0, 2]
             J = np.einsum("cd,cdij->cij", wd, info)[:, keep][:, :, keep] + np.eye(len(keep)) * 1e-9
             cov = np.linalg.inv(J)
             p_bar = np.einsum("cd,cd->c", wd, p)
             p_var = cov[:, -1, -1] * eff + np.einsum("cd,cd->c", wd, (p - p_bar[:, None]) ** 2)
             _, logdet = np.linalg.slogdet(J / (2.0 * np.pi))
-            ev = (
-                _logsumexp(ll - 0.5 * (p - prior) ** 2 / self._prior_var - math.log(n_d), axis=1)
-                - 0.5 * logdet
-            )
+            ev = _logsumexp(ll - 0.5 * (p - prior) ** 2 / self._prior_var - math.log(n_d), axis=1)
+            ev -= 0.5 * logdet
             if v == 1:
-                ev += math.log1p(-cfg.waviness_iso_weight) - math.log(
-                    self._beta_bounds[1] - self._beta_bounds[0]
-                )
+                width = self._beta_bounds[1] - self._beta_bounds[0]
+                ev += math.log1p(-cfg.waviness_iso_weight) - math.log(width)
             elif n_v == 2:
                 ev += math.log(cfg.waviness_iso_weight)
-            beta_var = cov[:, 1, 1] if v == 1 else np.zeros(n_c)
+            beta_var = cov[:, 1, 1] if v == 1 else np.zeros(rows)
             fits.append((lam, beta, p, wd, ev, p_bar, p_var, cov[:, 0, 0], beta_var))
-        logev = np.array([f[4] for f in fits]).T  # (C, V)
+        logev = np.array([f[4] for f in fits]).T  # (rows, V)
         vw = np.exp(logev - logev.max(axis=1, keepdims=True))
         vw /= vw.sum(axis=1, keepdims=True)
 
         def mix(i_mean: int, i_var: int) -> tuple[np.ndarray, np.ndarray]:
-            means = np.array([f[i_mean] for f in fits]).T  # (C, V)
+            means = np.array([f[i_mean] for f in fits]).T  # (rows, V)
             mean = np.sum(vw * means, axis=1)
             var = np.sum(vw * (np.array([f[i_var] for f in fits]).T + (means - mean[:, None]) ** 2), axis=1)
             return mean, var
@@ -1022,36 +1107,44 @@ class TyreMonitor:
         p_mean, p_var = mix(5, 6)
         lam_mean, lam_var = mix(0, 7)
         beta_mean, beta_var = mix(1, 8)
-        return _Fit(
-            lam=np.array([f[0] for f in fits]), beta=np.array([f[1] for f in fits]),
-            p=np.array([f[2] for f in fits]), wd=np.array([f[3] for f in fits]), variant_weight=vw,
-            p_mean=p_mean, p_var=p_var, lam_mean=lam_mean, lam_var=lam_var, beta_mean=beta_mean,
-            beta_var=beta_var, has_data=True,
-        )  # fmt: skip
+        out = []
+        for m in range(n_m):
+            if not has_data[m]:
+                out.append(self._empty_fit())
+                continue
+            sl = slice(m * n_c, (m + 1) * n_c)
+            out.append(_Fit(
+                lam=np.array([f[0][sl] for f in fits]), beta=np.array([f[1][sl] for f in fits]),
+                p=np.array([f[2][sl] for f in fits]), wd=np.array([f[3][sl] for f in fits]),
+                variant_weight=vw[sl], p_mean=p_mean[sl], p_var=p_var[sl], lam_mean=lam_mean[sl],
+                lam_var=lam_var[sl], beta_mean=beta_mean[sl], beta_var=beta_var[sl], has_data=True,
+            ))  # fmt: skip
+        return out
 
-    def _cold_start(self, proj, weight, log_cv) -> tuple[np.ndarray, np.ndarray]:  # noqa: D401
-        """First guess per corner: the joint estimator's 5 kPa grid with the level profiled, w = 2.
+    def _cold_start(self, proj, weight, log_cv, table) -> tuple[np.ndarray, np.ndarray]:
+        """First guess per row: the joint estimator's 5 kPa grid with the level profiled, w = 2.
 
-        Returns each corner's log level (C,) and pressure (C, D), kPa."""
-        n_c, n_d = proj.shape[:2]
+        `table` (rows,): each row's corner. Returns each row's log level (rows,) and pressure
+        (rows, D), kPa."""
+        n_r, n_d = proj.shape[:2]
         d = n_d // 2
         grid = np.arange(0, self._p_grid.size, 5)
-        p0 = np.empty((n_c, n_d))
-        lam_c = np.full(n_c, math.log(1e-5))
+        p0 = np.empty((n_r, n_d))
+        lam = np.full(n_r, math.log(1e-5))
         bounds = (np.full((1, 1), _LEVEL_BOUNDS[0]), np.full((1, 1), _LEVEL_BOUNDS[1]))
-        for c in range(n_c):
-            w = weight[c].reshape(1, -1)
+        for r in range(n_r):
+            w = weight[r].reshape(1, -1)
+            c = int(table[r])
             if not np.any(w > 0):
-                p0[c] = self._prior[c]
+                p0[r] = self._prior[c]
                 continue
-            gain = np.exp(self._log_gain[c, d][grid][:, None, :] + log_cv[None, :, None]).reshape(
-                grid.size, -1
-            )
-            ll, lam, fisher = profile_loglik(proj[c, d].reshape(1, -1), gain, w, log_sv_bounds=bounds)
+            gain = np.exp(self._log_gain[c, d][grid][:, None, :] + log_cv[None, :, None])
+            gain = gain.reshape(grid.size, -1)
+            ll, lam_r, fisher = profile_loglik(proj[r, d].reshape(1, -1), gain, w, log_sv_bounds=bounds)
             best = int(np.argmax(ll[0] - 0.5 * np.log(np.maximum(fisher[0], 1e-300))))
-            p0[c] = self._p_grid[grid][best]
-            lam_c[c] = lam[0, best]
-        return lam_c, p0
+            p0[r] = self._p_grid[grid][best]
+            lam[r] = lam_r[0, best]
+        return lam, p0
 
     # ------------------------------------------------------------------ output
     def _output(self, t_end: float, speed: float, status: np.ndarray, restarts: np.ndarray) -> MonitorUpdate:
@@ -1101,24 +1194,29 @@ def _detrend(x: np.ndarray) -> np.ndarray:
     return centred - (centred @ n / (n @ n))[..., None] * n
 
 
-def _clipped(x: np.ndarray, full_scale: float | None) -> np.ndarray:
-    """Per row: three or more consecutive samples at the row's extreme (or at the full scale)."""
+def _clipped(x: np.ndarray, top: np.ndarray, bottom: np.ndarray, full_scale: float | None) -> np.ndarray:
+    """Per row: three or more consecutive samples at the row's extreme `top` or `bottom` (or at the
+    full scale)."""
     out = np.zeros(x.shape[0], dtype=bool)
     if full_scale is not None:
-        out |= np.any(np.abs(x) >= 0.999 * full_scale, axis=1)
-    for extreme in (x.max(axis=1), x.min(axis=1)):
+        out |= np.maximum(top, -bottom) >= 0.999 * full_scale
+    for extreme in (top, bottom):
         at = x == extreme[:, None]
-        out |= np.any(at[:, :-2] & at[:, 1:-1] & at[:, 2:], axis=1)
+        maybe = np.flatnonzero(np.count_nonzero(at, axis=1) >= 3)  # rare: look closer only there
+        for r in maybe:
+            out[r] |= bool(np.any(at[r, :-2] & at[r, 1:-1] & at[r, 2:]))
     return out
 
 
-def _spiky(x: np.ndarray, z: float) -> np.ndarray:
-    """Per row: a sample more than z robust σ (1.4826 × median absolute deviation) from the median."""
-    sub = x[:, ::4]  # the median and MAD of every fourth sample: robust scale at a quarter of the cost
-    med = np.median(sub, axis=1, keepdims=True)
-    mad = 1.4826 * np.median(np.abs(sub - med), axis=1, keepdims=True)
-    dev = np.abs(x - med)
-    return np.any(dev > z * np.maximum(mad, 1e-12), axis=1)
+def _spiky(x: np.ndarray, top: np.ndarray, bottom: np.ndarray, z: float) -> np.ndarray:
+    """Per row: a sample more than z robust σ (1.4826 × median absolute deviation) from the median.
+
+    The median and MAD are those of every 16th sample (a robust scale at a 16th of the cost);
+    only the row's extremes `top` and `bottom` need comparing with them."""
+    sub = x[:, ::16]
+    med = np.median(sub, axis=1)
+    mad = 1.4826 * np.median(np.abs(sub - med[:, None]), axis=1)
+    return np.maximum(top - med, med - bottom) > z * np.maximum(mad, 1e-12)
 
 
 def pressure_at(update: MonitorUpdate, t_s: np.ndarray, prior_pa: np.ndarray, prior_sigma_pa: float):

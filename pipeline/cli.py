@@ -439,7 +439,7 @@ def monitor_command(
     ],
     out: Annotated[
         Path,
-        typer.Option("--out", help="Output Parquet: one row per update (every 2 s), per tyre the pressure, "
+        typer.Option("--out", help="Output Parquet: one row per update (every 4 s), per tyre the pressure, "
                      "its σ, flags, the warning's reference, probability and state."),
     ],
     placard: Annotated[
