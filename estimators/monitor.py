@@ -101,9 +101,10 @@ SKIP_REASONS = ("used", "gap", "clipped", "implausible", "spike", "speed", "low_
 """Per corner and segment, why it was (not) used for k_t: index into this tuple.
 ``gap``: a missing (NaN) value; ``clipped``: three or more consecutive samples at the segment's
 extreme or at the sensor's range; ``implausible``: a value beyond ``max_accel_mps2`` or a dead
-(constant) channel; ``spike``: a sample more than ``spike_z`` robust standard deviations from
-the median; ``speed``: speed not finite, negative or changing within the segment;
-``low_speed``: the band does not reach past the wheel hop."""
+(constant) channel; ``spike``: more than 0.2 % of an update's samples more than ``spike_z``
+robust standard deviations from the median (fewer are replaced by the median and counted as
+``despiked``, and the window is used); ``speed``: speed not finite, negative or changing
+within the segment; ``low_speed``: the band does not reach past the wheel hop."""
 
 _USED, _GAP, _CLIPPED, _IMPLAUSIBLE, _SPIKE, _SPEED, _LOW_SPEED = range(len(SKIP_REASONS))
 _LEVEL_BOUNDS = (np.log(1e-8), np.log(1e-1))  # log Gd(n0), m³
@@ -190,7 +191,7 @@ class MonitorConfig:
     max_speed_change: float = 0.1
     accel_range_mps2: float | None = None
     max_accel_mps2: float = 1000.0
-    spike_z: float = 15.0
+    spike_z: float = 8.0
     observable_sigma_kpa: float = 25.0
 
     def __post_init__(self) -> None:
@@ -623,6 +624,7 @@ class TyreMonitor:
             counts={
                 "segments": 0, **{r: np.zeros(n_c, dtype=int) for r in SKIP_REASONS},
                 "restarts": np.zeros(n_c, dtype=int),
+                "despiked": np.zeros(n_c, dtype=int),
             },
         )  # fmt: skip
 
@@ -755,7 +757,16 @@ class TyreMonitor:
         top, bottom = np.where(finite, top, 0.0), np.where(finite, bottom, 0.0)
         implausible = (np.maximum(top, -bottom) > cfg.max_accel_mps2) | (top == bottom)
         clipped = _clipped(xf, top, bottom, cfg.accel_range_mps2)
-        spiky = _spiky(xf, top, bottom, cfg.spike_z)
+        spiky, med, mad = _spiky(xf, top, bottom, cfg.spike_z)
+        # isolated spikes (at most 0.2 % of the block) are replaced by the block's median, in the
+        # stream's buffer itself (a_s, a_u are views of it), so the windows see clean data
+        limit = max(1, int(0.002 * x.shape[1]))
+        for r in np.flatnonzero(spiky & finite):
+            where = np.flatnonzero(np.abs(xf[r] - med[r]) > cfg.spike_z * max(mad[r], 1e-12))
+            if where.size <= limit:
+                (a_s if r < n_c else a_u)[where, r % n_c] = med[r]
+                self._state.counts["despiked"][r % n_c] += where.size
+                spiky[r] = False
         for c in range(n_c):
             rows = [c, n_c + c]
             if not np.all(finite[rows]):
@@ -782,6 +793,14 @@ class TyreMonitor:
         status = np.zeros(n_c, dtype=np.int8)
         for row in s.blocks[-n_blocks:]:  # the first problem of each corner's window, oldest first
             status = np.where(status == _USED, row, status)
+        # a window whose only problem is a gap keeps its data after the gap (at least a quarter window)
+        tail = np.full(n_c, t.size)
+        gap_only = np.all(np.isin(s.blocks[-n_blocks:], (_USED, _GAP)), axis=0) & (status == _GAP)
+        for c in np.flatnonzero(gap_only):
+            bad = np.flatnonzero(~(np.isfinite(a_s[:, c]) & np.isfinite(a_u[:, c])))
+            after = t.size - 1 - bad[-1]
+            if after >= self.window // 4:
+                tail[c], status[c] = after, _USED
         speed = float(np.mean(v))
         if np.any(status == _SPEED) or not (np.isfinite(speed) and speed > 0.0) or (
             np.ptp(v) > cfg.max_speed_change * speed
@@ -801,20 +820,31 @@ class TyreMonitor:
         restarts = np.zeros(n_c, dtype=int)
         if np.any(used):
             share = self.hop / self.window  # each sample is in window/hop windows
-            filled = t.size / self.window  # < 1 while the first window fills (zero-padded)
-            spec = self._cross_spectra(a_s[:, used], a_u[:, used])  # (Cu, F, 3)
+            # weights: a window of fewer samples (while the first fills, or the part after a gap) is
+            # zero-padded and counts for the share of a window it holds
+            w_c = share * np.minimum(tail, t.size) / self.window
+            whole = used & (tail == t.size)
+            spec = np.empty((int(used.sum()), self.freq.size, 3), dtype=complex)
+            if np.any(whole):
+                spec[whole[used]] = self._cross_spectra(a_s[:, whole], a_u[:, whole])
+            for i, c in enumerate(np.flatnonzero(used)):
+                if not whole[c]:
+                    spec[i] = self._cross_spectra(a_s[-tail[c] :, c : c + 1], a_u[-tail[c] :, c : c + 1])[0]
             b = self._speed_bin(speed)
-            # 1. predictive scores of the memories for the new block (before it is added)
-            newest = self._cross_spectra(block[2][:, used], block[3][:, used], own_grid=True)
-            scores = self._predictive_scores(newest, used, speed, share)  # (C, M), 0 where not used
+            # 1. predictive scores of the memories for the new block (before it is added; whole
+            # windows only: a block with a gap predicts nothing)
+            scores = np.zeros((n_c, n_m))
+            if np.any(whole):
+                newest = self._cross_spectra(block[2][:, whole], block[3][:, whole], own_grid=True)
+                scores = self._predictive_scores(newest, whole, speed, share)  # (C, M), 0 where not used
             decay = math.exp(-elapsed / cfg.selection_s)
             s.score = decay * s.score + scores
             # 2. forget (lazily: the stored sums are divided by the accumulated factor) and add
             self._forget(elapsed)
-            w = share * filled
+            w = w_c[used]
             for m in range(n_m):
                 k = s.scale[m]
-                s.spec[m][used, b] += w * spec / k
+                s.spec[m][used, b] += w[:, None, None] * spec / k
                 s.weight[m][used, b] += w / k
                 s.weight2[m][used, b] += w * w / share / k**2  # overlapping windows: blocks of weight w/share
                 s.speed_sum[m][used, b] += w * speed / k
@@ -825,10 +855,10 @@ class TyreMonitor:
             s.recent_u, s.recent_i = np.roll(s.recent_u, -1, axis=0), np.roll(s.recent_i, -1, axis=0)
             s.recent_p = np.roll(s.recent_p, -1, axis=0)
             s.recent_spec[-1] = 0.0
-            s.recent_spec[-1, used] = w * spec
-            s.recent_weight[-1] = np.where(used, w, 0.0)
+            s.recent_spec[-1, used] = w[:, None, None] * spec
+            s.recent_weight[-1] = np.where(used, w_c, 0.0)
             s.recent_speed[-1], s.recent_t[-1] = speed, t_end
-            s.recent_u[-1], s.recent_i[-1], s.recent_p[-1] = self._window_score(spec, used, speed, w)
+            s.recent_u[-1], s.recent_i[-1], s.recent_p[-1] = self._window_score(spec, used, speed, w_c)
             start = self._change_test(used)
             for c in np.flatnonzero(start >= 0):
                 self._rebuild(c, int(start[c]), t_end)
@@ -874,8 +904,8 @@ class TyreMonitor:
         out[hit] = best[hit]
         return out
 
-    def _window_score(self, spec: np.ndarray, used: np.ndarray, speed: float, w: float):
-        """Score and information in p of one window (its corners `used`, weight `w`) at the longest
+    def _window_score(self, spec: np.ndarray, used: np.ndarray, speed: float, w: np.ndarray):
+        """Score and information in p of one window (its corners `used`, weights `w` (C,)) at the longest
         memory's estimate, and that estimate: three (C,) arrays (zero for corners not used)."""
         s = self._state
         n_c = len(self.models)
@@ -893,7 +923,7 @@ class TyreMonitor:
         beta, p = np.ascontiguousarray(fit.beta[v, pick]), np.ascontiguousarray(fit.p[v, pick])
         _, score, info = _corner_terms(
             lam, beta, p, self._tables, self._log_gain, self._dlog_gain, float(self._p_grid[0]), self._p_step,
-            self._project(full), w * used[:, None, None] * weight[None], x, log_cv,
+            self._project(full), (w * used)[:, None, None] * weight[None], x, log_cv,
         )  # fmt: skip
         wd = fit.wd[v, pick]
         u = np.einsum("cd,cd->c", wd, score[..., 2])
@@ -1208,15 +1238,16 @@ def _clipped(x: np.ndarray, top: np.ndarray, bottom: np.ndarray, full_scale: flo
     return out
 
 
-def _spiky(x: np.ndarray, top: np.ndarray, bottom: np.ndarray, z: float) -> np.ndarray:
-    """Per row: a sample more than z robust σ (1.4826 × median absolute deviation) from the median.
+def _spiky(x: np.ndarray, top: np.ndarray, bottom: np.ndarray, z: float):
+    """Per row: a sample more than z robust σ (1.4826 × median absolute deviation) from the median;
+    and the rows' medians and robust σ.
 
     The median and MAD are those of every 16th sample (a robust scale at a 16th of the cost);
     only the row's extremes `top` and `bottom` need comparing with them."""
     sub = x[:, ::16]
     med = np.median(sub, axis=1)
     mad = 1.4826 * np.median(np.abs(sub - med[:, None]), axis=1)
-    return np.maximum(top - med, med - bottom) > z * np.maximum(mad, 1e-12)
+    return np.maximum(top - med, med - bottom) > z * np.maximum(mad, 1e-12), med, mad
 
 
 def pressure_at(update: MonitorUpdate, t_s: np.ndarray, prior_pa: np.ndarray, prior_sigma_pa: float):
