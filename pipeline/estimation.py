@@ -29,7 +29,15 @@ from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
 from suvtwin.pipeline.estimator_registry import CornerSignals, estimate_columns, find_estimator
 from suvtwin.pipeline.scoring import PRESSURE_TOLERANCE_KPA, run_metrics
 
-__all__ = ["EstimateRun", "estimate_run", "linear_corner_model", "score_estimate", "write_estimate"]
+__all__ = [
+    "EstimateRun",
+    "corner_sprung_mass",
+    "estimate_run",
+    "linear_corner_model",
+    "run_load_and_tire",
+    "score_estimate",
+    "write_estimate",
+]
 
 _METADATA_KEY = b"suvtwin.estimate"
 
@@ -84,18 +92,8 @@ def estimate_run(
     entry = find_estimator(estimator, road_input)
     frame, meta, dt = _load_run(path, corner, gaps=entry.tolerates_gaps)
     vehicle = load_vehicle()
-    scenario = meta.get("scenario", {})
-    tire_file = scenario.get("tire_file")  # a run made with another tyre is estimated with its k_t(p)
-    if tire_file is not None and not Path(tire_file).is_file():
-        raise InputError(f"run {path} was simulated with the tyre file {tire_file}, which is not there now")
-    load = sum(item.get("mass_kg", 0.0) for item in scenario.get("load", []))
-    front = corner.startswith("f")
-    ms = sprung_mass_share(
-        vehicle.chassis.mass,
-        a_opposite=vehicle.chassis.a2 if front else vehicle.chassis.a1,
-        wheelbase=vehicle.wheelbase,
-        load=load,
-    )
+    load, tire_file = run_load_and_tire(meta, path)
+    ms = corner_sprung_mass(corner, load)
     mus = vehicle.unsprung_mass[CORNERS.index(corner)]
     signals = CornerSignals(
         acc_sprung=frame[f"{corner}_accel_sprung_mps2"].to_numpy()[None, :],
@@ -124,6 +122,29 @@ def estimate_run(
     }
     table = pd.DataFrame(estimate_columns(batch, 0, frame["t_s"].to_numpy()))
     return EstimateRun(table=table, metadata=metadata)
+
+
+def run_load_and_tire(meta: dict, path: str | Path) -> tuple[float, str | None]:
+    """The extra load (kg) and the tyre file (None: the SUV's) of a run, from its metadata.
+
+    A run made with another tyre is estimated with its k_t(p); that file must still be there."""
+    scenario = meta.get("scenario", {})
+    tire_file = scenario.get("tire_file")
+    if tire_file is not None and not Path(tire_file).is_file():
+        raise InputError(f"run {path} was simulated with the tyre file {tire_file}, which is not there now")
+    return float(sum(item.get("mass_kg", 0.0) for item in scenario.get("load", []))), tire_file
+
+
+def corner_sprung_mass(corner: str, load_kg: float = 0.0) -> float:
+    """The SUV corner's sprung mass with `load_kg` of extra load, kg (paper 000 eq. 2)."""
+    vehicle = load_vehicle()
+    front = corner.startswith("f")
+    return sprung_mass_share(
+        vehicle.chassis.mass,
+        a_opposite=vehicle.chassis.a2 if front else vehicle.chassis.a1,
+        wheelbase=vehicle.wheelbase,
+        load=load_kg,
+    )
 
 
 def linear_corner_model(

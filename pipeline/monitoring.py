@@ -23,10 +23,9 @@ import pandas as pd
 from suvtwin.errors import InputError
 from suvtwin.estimators.deflation import DeflationRule, deflation_warnings
 from suvtwin.estimators.monitor import SKIP_REASONS, MonitorConfig, MonitorUpdate, TyreMonitor
-from suvtwin.estimators.quarter_car import sprung_mass_share
 from suvtwin.files import atomic_write, read_parquet_table
-from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
-from suvtwin.pipeline.estimation import linear_corner_model
+from suvtwin.mjcf.vehicle import CORNERS
+from suvtwin.pipeline.estimation import corner_sprung_mass, linear_corner_model, run_load_and_tire
 from suvtwin.tire_stiffness import tire_stiffness_of
 
 __all__ = ["MonitorResult", "corner_models", "monitor_run", "monitor_signals", "write_monitor"]
@@ -45,18 +44,7 @@ class MonitorResult:
 
 def corner_models(corners: tuple[str, ...], *, load_kg: float = 0.0, tire_file: str | Path | None = None):
     """The SUV's linear corner models of `corners`, with `load_kg` of extra load on the chassis."""
-    vehicle = load_vehicle()
-    models = []
-    for corner in corners:
-        front = corner.startswith("f")
-        ms = sprung_mass_share(
-            vehicle.chassis.mass,
-            a_opposite=vehicle.chassis.a2 if front else vehicle.chassis.a1,
-            wheelbase=vehicle.wheelbase,
-            load=load_kg,
-        )
-        models.append(linear_corner_model(corner, ms, tire_file=tire_file))
-    return models
+    return [linear_corner_model(c, corner_sprung_mass(c, load_kg), tire_file=tire_file) for c in corners]
 
 
 def monitor_signals(
@@ -132,11 +120,7 @@ def monitor_run(
         raise InputError(f"--reset-at must lie within the run, {t[0]:g}–{t[-1]:g} s, got {reset_at_s}")
     raw = (table.schema.metadata or {}).get(b"suvtwin.run")
     meta = json.loads(raw) if raw else {}
-    scenario = meta.get("scenario", {})
-    tire_file = scenario.get("tire_file")
-    if tire_file is not None and not Path(tire_file).is_file():
-        raise InputError(f"run {path} was simulated with the tyre file {tire_file}, which is not there now")
-    load = float(sum(item.get("mass_kg", 0.0) for item in scenario.get("load", [])))
+    load, tire_file = run_load_and_tire(meta, path)
     acc_s = frame[[f"{c}_accel_sprung_mps2" for c in corners]].to_numpy(dtype=float)
     acc_u = frame[[f"{c}_accel_unsprung_mps2" for c in corners]].to_numpy(dtype=float)
     monitor, update = monitor_signals(
