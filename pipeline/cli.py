@@ -404,7 +404,7 @@ def estimate_command(
     corner: Annotated[str, typer.Option(help="Corner to estimate: fl, fr, rl or rr.")] = "fl",
     estimator: Annotated[
         EstimatorName, typer.Option(help=estimator_help()),
-    ] = EstimatorName["online"],
+    ] = EstimatorName["joint"],
     params: Annotated[
         str,
         typer.Option(

@@ -39,19 +39,22 @@ def test_monitor_writes_every_tyre_and_warns_against_a_placard(run_file, tmp_pat
     assert "WARNING" in capsys.readouterr().out
 
 
-def test_online_estimate_tolerates_a_gap(run_file, tmp_path):
+def test_online_estimate_tolerates_a_gap(run_file, tmp_path, capsys):
     frame = pq.read_table(run_file).to_pandas()
     frame.loc[3000:3500, "fl_accel_unsprung_mps2"] = np.nan
     gapped = tmp_path / "gapped.parquet"
     frame.to_parquet(gapped)
     out = tmp_path / "est.parquet"
-    assert main(["estimate", str(gapped), "--out", str(out)]) == 0  # the default estimator is the online one
+    assert main(["estimate", str(gapped), "--estimator", "online", "--out", str(out)]) == 0
     est = pq.read_table(out)
     meta = json.loads(est.schema.metadata[b"suvtwin.estimate"])
     assert meta["estimator"] == "online" and meta["causal"]
     assert meta["windows_used"][0] < 5  # the windows holding the gap were skipped
     values = est.column("pressure_hat_kpa").to_numpy()
     assert est.num_rows == len(frame) and np.all(np.isfinite(values))
+    # the default estimator (the most accurate on a recorded run: the joint one) refuses the gap
+    assert main(["estimate", str(gapped), "--out", str(out)]) == 2
+    assert "NaN" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize(
