@@ -210,7 +210,7 @@ def test_simulate_cli_takes_a_tire_file(tmp_path, capsys):
     assert meta["scenario"]["tire_file"] == str(stiff)
     # the estimate uses the run's tyre: its k_t at the initial guess p0 = 250 kPa is that file's kt0
     est = tmp_path / "est.parquet"
-    assert main(["estimate", str(out), "--out", str(est)]) == 0
+    assert main(["estimate", str(out), "--estimator", "imm", "--out", str(est)]) == 0
     first_kt = pq.read_table(est).column("tire_stiffness_hat_npm").to_numpy()[0]
     assert first_kt == pytest.approx(344110.0, rel=0.02)  # the SUV's tyre would start at 264700
     broken = _variant(tmp_path, lambda t: t.replace("= 13.728 ", "= x "), "broken.tir")
