@@ -538,7 +538,6 @@ class TyreMonitor:
         group[above] = n_single + (np.arange(fine.size - first_above) // per_group)
         self._group_start = np.flatnonzero(np.r_[True, np.diff(group) != 0])  # reduceat offsets
         self._group_size = np.diff(np.r_[self._group_start, fine.size]).astype(float)
-        self._fine_freq = fine
         # an update block's own Fourier frequency nearest each window frequency
         self._block_index = np.rint(fine * self.hop * dt).astype(int)
         self.freq = np.add.reduceat(fine, self._group_start) / self._group_size
@@ -904,6 +903,20 @@ class TyreMonitor:
         out[hit] = best[hit]
         return out
 
+    def _terms_at(self, fit: _Fit, proj, weight, x, log_cv):
+        """:func:`_corner_terms` at a memory's estimate, each corner with its likelier slope model;
+        also that model's damping weights (C, D)."""
+        n_c = len(self.models)
+        v = np.argmax(fit.variant_weight, axis=1)
+        pick = np.arange(n_c)
+        lam = np.ascontiguousarray(fit.lam[v, pick])
+        lam = np.where(np.isfinite(lam), lam, math.log(1e-5))
+        ll, score, info = _corner_terms(
+            lam, np.ascontiguousarray(fit.beta[v, pick]), np.ascontiguousarray(fit.p[v, pick]), self._tables,
+            self._log_gain, self._dlog_gain, float(self._p_grid[0]), self._p_step, proj, weight, x, log_cv,
+        )  # fmt: skip
+        return ll, score, info, fit.wd[v, pick]
+
     def _window_score(self, spec: np.ndarray, used: np.ndarray, speed: float, w: np.ndarray):
         """Score and information in p of one window (its corners `used`, weights `w` (C,)) at the longest
         memory's estimate, and that estimate: three (C,) arrays (zero for corners not used)."""
@@ -913,19 +926,11 @@ class TyreMonitor:
         fit = s.fits[-1]
         if fit is None or not fit.has_data:
             return zeros, zeros, zeros
-        v = np.argmax(fit.variant_weight, axis=1)
-        pick = np.arange(n_c)
-        lam = np.ascontiguousarray(fit.lam[v, pick])
-        lam = np.where(np.isfinite(lam), lam, math.log(1e-5))
         full = np.zeros((n_c, 1, self.freq.size, 3), dtype=complex)
         full[used, 0] = spec
         weight, x, log_cv = self._band(np.array([speed]))
-        beta, p = np.ascontiguousarray(fit.beta[v, pick]), np.ascontiguousarray(fit.p[v, pick])
-        _, score, info = _corner_terms(
-            lam, beta, p, self._tables, self._log_gain, self._dlog_gain, float(self._p_grid[0]), self._p_step,
-            self._project(full), (w * used)[:, None, None] * weight[None], x, log_cv,
-        )  # fmt: skip
-        wd = fit.wd[v, pick]
+        weight = (w * used)[:, None, None] * weight[None]
+        _, score, info, wd = self._terms_at(fit, self._project(full), weight, x, log_cv)
         u = np.einsum("cd,cd->c", wd, score[..., 2])
         i = np.einsum("cd,cd->c", wd, info[..., 2, 2])
         return u, i, np.where(used, fit.p_mean, 0.0)
@@ -1026,14 +1031,7 @@ class TyreMonitor:
         for m, fit in enumerate(s.fits):
             if fit is None or not fit.has_data:
                 continue
-            v = np.argmax(fit.variant_weight, axis=1)  # each corner's likelier slope model
-            pick = np.arange(n_c)
-            ll, _, info = _corner_terms(
-                np.ascontiguousarray(fit.lam[v, pick]), np.ascontiguousarray(fit.beta[v, pick]),
-                np.ascontiguousarray(fit.p[v, pick]), self._tables, self._log_gain, self._dlog_gain,
-                float(self._p_grid[0]), self._p_step, proj, weight, x, log_cv,
-            )  # fmt: skip
-            wd = fit.wd[v, pick]
+            ll, _, info, wd = self._terms_at(fit, proj, weight, x, log_cv)
             plug_in = _logsumexp(ll + np.log(np.maximum(wd, 1e-300)), axis=1)
             i_pp = np.einsum("cd,cd->c", wd, info[:, :, 2, 2])
             i_ll = np.einsum("cd,cd->c", wd, info[:, :, 0, 0])
