@@ -93,7 +93,12 @@ from suvtwin.errors import InputError
 from suvtwin.estimators.joint import N0, LinearQuarterCar, profile_loglik, signal_direction, signal_gain
 from suvtwin.estimators.quarter_car import stiffness_from_pressure
 from suvtwin.jit import cached_njit
-from suvtwin.tire_stiffness import TireStiffness, suv_tire_stiffness
+from suvtwin.tire_stiffness import (
+    TireStiffness,
+    stiffness_at_pressure_array,
+    stiffness_sigma_at_pressure_sigma,
+    suv_tire_stiffness,
+)
 
 __all__ = ["SKIP_REASONS", "MonitorConfig", "MonitorUpdate", "TyreMonitor", "pressure_at"]
 
@@ -579,12 +584,7 @@ class TyreMonitor:
         self._u11 = (np.abs(self._u[:, :, 0]) ** 2)[:, :, None, :] / self.noise
         self._u22 = (np.abs(self._u[:, :, 1]) ** 2)[:, :, None, :] / self.noise
         self._u12 = (2.0 * np.conj(self._u[:, :, 0]) * self._u[:, :, 1])[:, :, None, :] / self.noise
-        # eq. 3–4 is linear in p: k_t = kt_at_zero + kt_per_kpa · p
-        self._kt_per_kpa = np.array([
-            stiffness_from_pressure(1e3, **asdict(t)) - stiffness_from_pressure(0.0, **asdict(t))
-            for t in self.tires
-        ])  # fmt: skip
-        self._kt_at_zero = np.array([stiffness_from_pressure(0.0, **asdict(t)) for t in self.tires])
+        self._laws = np.array([[t.kt0, t.p0, t.pfz1] for t in self.tires]).T  # (3, C): eq. 3–4 per corner
         self._prior = np.array(
             [t.p0 / 1e3 if cfg.prior_pressure_kpa is None else cfg.prior_pressure_kpa for t in self.tires]
         )
@@ -1196,8 +1196,8 @@ class TyreMonitor:
             pooled = np.any(np.isfinite(spread))
             waviness = 2.0 - (np.average(best.beta_mean[ok], weights=1.0 / spread) if pooled
                               else float(np.mean(best.beta_mean[ok])))  # fmt: skip
-        kt = self._kt_at_zero + self._kt_per_kpa * p
-        kt_sig = np.abs(self._kt_per_kpa) * sigma
+        kt = stiffness_at_pressure_array(p * 1e3, *self._laws)
+        kt_sig = np.abs(stiffness_sigma_at_pressure_sigma(sigma * 1e3, *self._laws))
         return MonitorUpdate(
             t_s=np.array([t_end]),
             pressure_pa=p[None] * 1e3,

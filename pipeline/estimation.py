@@ -31,6 +31,7 @@ from suvtwin.pipeline.scoring import PRESSURE_TOLERANCE_KPA, run_metrics
 
 __all__ = [
     "EstimateRun",
+    "check_time_axis",
     "corner_sprung_mass",
     "estimate_run",
     "linear_corner_model",
@@ -68,17 +69,25 @@ def _load_run(path: str | Path, corner: str, *, gaps: bool = False) -> tuple[pd.
     if not np.all(np.isfinite(values)):
         bad = [c for c in checked if not np.all(np.isfinite(frame[c].to_numpy(dtype=float)))]
         raise InputError(f"run file {str(path)!r}: column(s) {', '.join(bad)} hold NaN or infinite values")
-    t = frame["t_s"].to_numpy(dtype=float)
+    dt = check_time_axis(frame["t_s"].to_numpy(dtype=float), path)
+    raw = (table.schema.metadata or {}).get(b"suvtwin.run")
+    meta = json.loads(raw) if raw else {}
+    return frame, meta, dt
+
+
+def check_time_axis(t: np.ndarray, path: str | Path) -> float:
+    """The sample interval (s) of a run file's time axis `t_s`; refuses fewer than 10 samples, a
+    non-finite, non-increasing or non-uniform axis (one message naming the file)."""
     if t.size < 10:
         raise InputError(f"run file {str(path)!r}: needs at least 10 samples, got {t.size}")
+    if not np.all(np.isfinite(t)):
+        raise InputError(f"run file {str(path)!r}: column(s) t_s hold NaN or infinite values")
     step = np.diff(t)
     if np.any(step <= 0):
         raise InputError(f"run file {str(path)!r}: t_s must be strictly increasing")
     if np.ptp(step) > 1e-6 * np.mean(step) + 1e-12:
-        raise InputError(f"run file {str(path)!r}: t_s must be uniformly sampled")
-    raw = (table.schema.metadata or {}).get(b"suvtwin.run")
-    meta = json.loads(raw) if raw else {}
-    return frame, meta, float(np.mean(step))
+        raise InputError(f"run file {str(path)!r}: t_s must be uniformly sampled (mark missing samples NaN)")
+    return float(np.mean(step))
 
 
 def estimate_run(

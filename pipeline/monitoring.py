@@ -25,7 +25,12 @@ from suvtwin.estimators.deflation import DeflationRule, deflation_warnings
 from suvtwin.estimators.monitor import SKIP_REASONS, MonitorConfig, MonitorUpdate, TyreMonitor
 from suvtwin.files import atomic_write, read_parquet_table
 from suvtwin.mjcf.vehicle import CORNERS
-from suvtwin.pipeline.estimation import corner_sprung_mass, linear_corner_model, run_load_and_tire
+from suvtwin.pipeline.estimation import (
+    check_time_axis,
+    corner_sprung_mass,
+    linear_corner_model,
+    run_load_and_tire,
+)
 from suvtwin.tire_stiffness import tire_stiffness_of
 
 __all__ = ["MonitorResult", "corner_models", "monitor_run", "monitor_signals", "write_monitor"]
@@ -111,11 +116,7 @@ def monitor_run(
         raise InputError(f"run file {str(path)!r} lacks column(s) {', '.join(missing)}")
     frame = table.select(needed).to_pandas()
     t = frame["t_s"].to_numpy(dtype=float)
-    if t.size < 10 or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
-        raise InputError(f"run file {str(path)!r}: t_s must be finite, strictly increasing, ≥ 10 samples")
-    step = np.diff(t)
-    if np.ptp(step) > 1e-6 * np.mean(step) + 1e-12:
-        raise InputError(f"run file {str(path)!r}: t_s must be uniformly sampled (mark missing samples NaN)")
+    check_time_axis(t, path)
     if reset_at_s is not None and not (np.isfinite(reset_at_s) and t[0] <= reset_at_s <= t[-1]):
         raise InputError(f"--reset-at must lie within the run, {t[0]:g}–{t[-1]:g} s, got {reset_at_s}")
     raw = (table.schema.metadata or {}).get(b"suvtwin.run")
