@@ -1,0 +1,137 @@
+"""Suspension laws and their equivalent linearization, checked against the simulator's compiled
+laws (a second implementation), numerical quadrature, and the MuJoCo SUV on a rough road."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy import integrate
+
+from suvtwin.errors import InputError
+from suvtwin.mjcf import kernel
+from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
+from suvtwin.suspension_law import (
+    SuspensionLaw,
+    damper_force,
+    equivalent_spring_rate,
+    gaussian_damper_force,
+    gaussian_spring_force,
+    gaussian_spring_rate,
+    spring_force,
+    spring_rate,
+    static_travel,
+)
+
+VEHICLE = load_vehicle()
+LAWS = [SuspensionLaw.of(VEHICLE.suspension, spring_rate=k) for k in VEHICLE.spring_rate]
+
+
+def _vp() -> np.ndarray:
+    """The simulator's packed suspension values (preload zero: forces beyond the preload)."""
+    s = VEHICLE.suspension
+    vp = np.zeros(kernel.N_VEHICLE)
+    vp[kernel.V_SPRING : kernel.V_SPRING + 4] = VEHICLE.spring_rate
+    vp[kernel.V_PROGRESSION] = s.spring_progression
+    vp[kernel.V_BUMP_CLEAR], vp[kernel.V_BUMP_LIN], vp[kernel.V_BUMP_QUAD] = (
+        s.bump_stop_clearance, s.bump_stop_linear, s.bump_stop_quadratic)  # fmt: skip
+    vp[kernel.V_REB_CLEAR], vp[kernel.V_REB_LIN], vp[kernel.V_REB_QUAD] = (
+        s.rebound_stop_clearance, s.rebound_stop_linear, s.rebound_stop_quadratic)  # fmt: skip
+    vp[kernel.V_C_COMP_LOW], vp[kernel.V_C_COMP_HIGH] = s.damper_compression_low, s.damper_compression_high
+    vp[kernel.V_C_REB_LOW], vp[kernel.V_C_REB_HIGH] = s.damper_rebound_low, s.damper_rebound_high
+    vp[kernel.V_V_KNEE] = s.damper_knee_velocity
+    return vp
+
+
+VP = _vp()
+
+
+@pytest.mark.parametrize("corner", [0, 2])
+def test_laws_match_the_simulator(corner):
+    s = np.linspace(-0.12, 0.12, 481)
+    sim = np.array([kernel._spring(corner, x, VP) for x in s])
+    np.testing.assert_allclose(spring_force(s, LAWS[corner]), sim, rtol=1e-12, atol=1e-9)
+    v = np.linspace(-1.5, 1.5, 301)
+    sim_d = np.array([kernel._damper(x, VP) for x in v])
+    np.testing.assert_allclose(damper_force(v, LAWS[corner]), sim_d, rtol=1e-12, atol=1e-9)
+    # the local rate is the simulator's force's derivative (central differences away from the kinks)
+    h = 1e-6
+    smooth = np.all(np.abs(s[:, None] - np.array([0.0, 0.06, -0.08])[None]) > 2e-3, axis=1)
+    f = lambda x: kernel._spring(corner, x, VP)  # noqa: E731
+    diff = np.array([f(x + h) - f(x - h) for x in s]) / (2 * h)
+    np.testing.assert_allclose(spring_rate(s, LAWS[corner])[smooth], diff[smooth], rtol=1e-6)
+
+
+def _gauss_expect(fun, mean, sigma):
+    pdf = lambda x: math.exp(-0.5 * ((x - mean) / sigma) ** 2) / (sigma * math.sqrt(2 * math.pi))  # noqa: E731
+    kinks = [mean - 8 * sigma, -0.08, 0.0, 0.06, mean + 8 * sigma]
+    pts = sorted(k for k in kinks if mean - 8 * sigma <= k <= mean + 8 * sigma)
+    return sum(integrate.quad(lambda x: fun(x) * pdf(x), a, b, epsabs=1e-12, epsrel=1e-11)[0]
+               for a, b in zip(pts[:-1], pts[1:], strict=False))  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("mean", "sigma"), [(0.0, 0.005), (0.02, 0.02), (0.045, 0.03), (-0.05, 0.025), (0.01, 1e-4)]
+)
+def test_gaussian_expectations_match_quadrature_of_the_simulator_law(mean, sigma):
+    law = LAWS[2]
+    force = _gauss_expect(lambda x: kernel._spring(2, x, VP), mean, sigma)
+    assert gaussian_spring_force(law, mean, sigma) == pytest.approx(force, rel=1e-8, abs=1e-6)
+    rate = _gauss_expect(lambda x: float(spring_rate(x, law)), mean, sigma)
+    assert gaussian_spring_rate(law, mean, sigma) == pytest.approx(rate, rel=1e-8)
+    # Stein's lemma: E[x F(m + x)] = σ² E[F'(m + x)], the statistical-linearization identity
+    stein = _gauss_expect(lambda x: (x - mean) * kernel._spring(2, x, VP), mean, sigma) / sigma**2
+    assert stein == pytest.approx(rate, rel=1e-6)
+    sv = 20 * sigma
+    damper = _gauss_expect(lambda v: kernel._damper(v, VP), 0.0, sv)
+    assert gaussian_damper_force(law, sv) == pytest.approx(damper, rel=1e-8, abs=1e-8)
+
+
+def test_linear_law_limits():
+    law = SuspensionLaw(spring_rate=30000.0)
+    m, k = equivalent_spring_rate(law, 0.01, 0.03)
+    assert k == pytest.approx(30000.0) and m == pytest.approx(0.01)
+    assert static_travel(law, 600.0) == pytest.approx(0.02)
+    # the SUV's spring: +30 % rate at 50 mm bump (its design statement), stiffer on rough roads
+    assert float(spring_rate(0.05, LAWS[0])) / LAWS[0].spring_rate == pytest.approx(1.3)
+    _, k_rough = equivalent_spring_rate(LAWS[2], 0.02, np.array([0.002, 0.01, 0.02, 0.04]), 0.1)
+    assert np.all(np.diff(k_rough) > 0) and k_rough[0] == pytest.approx(LAWS[2].spring_rate * 1.05, rel=0.02)
+
+
+def test_mean_balances_the_static_load():
+    law = LAWS[2]
+    s0 = float(static_travel(law, 900.0))
+    assert float(spring_force(s0, law)) == pytest.approx(900.0)
+    m, _ = equivalent_spring_rate(law, s0, 0.02, 0.3)
+    balance = gaussian_spring_force(law, m, 0.02) + gaussian_damper_force(law, 0.3)
+    assert balance == pytest.approx(900.0, rel=1e-9)
+    assert gaussian_damper_force(law, 0.3) < 0.0  # rebound stiffer: the body is pulled down
+
+
+def test_bad_law_is_refused():
+    with pytest.raises(InputError, match="spring_rate"):
+        SuspensionLaw(spring_rate=0.0)
+    with pytest.raises(InputError, match="bump_clearance"):
+        SuspensionLaw(spring_rate=1.0, bump_clearance=-0.01)
+
+
+def test_linearization_predicts_the_mujoco_suv_on_a_rough_road():
+    """On a class D road at 60 km/h without extra load, the mean travel and the equivalent rate
+    predicted from the travel's and its velocity's standard deviations match the simulated ones
+    (mean within 3 mm, rate within 5 % of E[F'(s)] over the simulated travel)."""
+    from suvtwin.pipeline.scenario import parse_scenario
+    from suvtwin.pipeline.simulator import simulate
+
+    scenario = parse_scenario({
+        "duration_s": 12.0, "seed": 4321, "speed_kmh": 60.0,
+        "road": {"segments": [{"length_m": 260.0, "gd_n0": 1.0e-3}]},
+    }, source="test")  # fmt: skip
+    table = simulate(scenario).table.iloc[2000:]
+    for i, c in enumerate(CORNERS):
+        s = table[f"{c}_susp_travel_m"].to_numpy()
+        v = np.gradient(s, 1e-3)
+        m, k = equivalent_spring_rate(LAWS[i], 0.0, s.std(), v.std())
+        assert float(m) == pytest.approx(s.mean(), abs=3e-3), c
+        assert float(k) == pytest.approx(float(np.mean(spring_rate(s, LAWS[i]))), rel=0.05), c
+        assert float(k) > 1.03 * LAWS[i].spring_rate, c  # the linear rate is too soft here
