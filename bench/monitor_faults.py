@@ -46,6 +46,8 @@ def _faults(acc_s: np.ndarray, acc_u: np.ndarray, t: np.ndarray) -> dict:
 
 
 def main() -> None:
+    from suvtwin.estimators.monitor import SKIP_REASONS
+    from suvtwin.pipeline.estimation import run_loads
     from suvtwin.pipeline.monitoring import monitor_signals
 
     n_runs = int(sys.argv[1]) if len(sys.argv) > 1 else 12
@@ -58,14 +60,13 @@ def main() -> None:
     counts: dict = {}
     for path in paths:
         table = pq.read_table(path).to_pandas()
-        meta = json.loads(pq.read_schema(path).metadata[b"suvtwin.run"])["scenario"]
-        load = float(sum(item.get("mass_kg", 0.0) for item in meta.get("load", [])))
+        loads = run_loads(json.loads(pq.read_schema(path).metadata[b"suvtwin.run"]))
         t = table["t_s"].to_numpy()
         truth = table[[f"{c}_pressure_kpa" for c in CORNERS]].to_numpy()
         acc_s = table[[f"{c}_accel_sprung_mps2" for c in CORNERS]].to_numpy()
         acc_u = table[[f"{c}_accel_unsprung_mps2" for c in CORNERS]].to_numpy()
         for case, (s, u) in _faults(acc_s, acc_u, t).items():
-            monitor, out = monitor_signals(t, table["speed_mps"].to_numpy(), s, u, load_kg=load)
+            monitor, out = monitor_signals(t, table["speed_mps"].to_numpy(), s, u, loads=loads)
             idx = np.searchsorted(t, out.t_s)
             err = out.pressure_pa / 1e3 - truth[idx]
             sig = out.pressure_sigma_pa / 1e3
@@ -76,7 +77,7 @@ def main() -> None:
             inside.setdefault(case, []).extend((np.abs(err[after]) <= 2 * sig[after]).ravel().tolist())
             c = monitor.counts
             total = counts.setdefault(case, {})
-            for reason in ("used", "gap", "clipped", "implausible", "spike", "speed", "low_speed"):
+            for reason in SKIP_REASONS:
                 total[reason] = total.get(reason, 0) + int(np.sum(c[reason]))
     clean = np.array(errors["clean"])
     result = {}

@@ -82,6 +82,7 @@ from suvtwin.estimators.quarter_car import (
     stiffness_from_pressure,
 )
 from suvtwin.jit import cached_njit
+from suvtwin.suspension_law import SuspensionLaw
 from suvtwin.tire_stiffness import TireStiffness, suv_tire_stiffness
 
 __all__ = [
@@ -116,6 +117,12 @@ class LinearQuarterCar:
       :math:`\tfrac12 S_v(h_H h_H^H + h_R h_R^H)` (rank 2). None: no roll mode.
     - ``damping_range`` (N s/m): the equivalent linear damping is only known to lie in this range
       (a digressive damper's slopes); the estimator marginalizes over it (uniform prior).
+    - ``suspension`` and ``static_travel`` (m, compression from the design position at rest):
+      the corner's non-linear spring and damper laws (:class:`suvtwin.suspension_law.SuspensionLaw`,
+      whose ``spring_rate`` is ``spring_rate`` here). An estimator that has them replaces
+      ``spring_rate`` by the equivalent rate at the travel it measures
+      (:func:`suvtwin.suspension_law.equivalent_spring_rate`; the online monitor does); None: the
+      spring is linear.
     """
 
     sprung_mass: float
@@ -126,6 +133,8 @@ class LinearQuarterCar:
     roll_mass: float | None = None
     anti_roll: float = 0.0
     damping_range: tuple[float, float] | None = None
+    suspension: SuspensionLaw | None = None
+    static_travel: float = 0.0
 
 
 @dataclass(frozen=True)

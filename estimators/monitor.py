@@ -88,11 +88,13 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 import numpy.typing as npt
+from scipy.special import ndtr
 
 from suvtwin.errors import InputError
 from suvtwin.estimators.joint import N0, LinearQuarterCar, profile_loglik, signal_direction, signal_gain
 from suvtwin.estimators.quarter_car import stiffness_from_pressure
 from suvtwin.jit import cached_njit
+from suvtwin.suspension_law import equivalent_spring_rate
 from suvtwin.tire_stiffness import (
     TireStiffness,
     stiffness_at_pressure_array,
@@ -102,17 +104,20 @@ from suvtwin.tire_stiffness import (
 
 __all__ = ["SKIP_REASONS", "MonitorConfig", "MonitorUpdate", "TyreMonitor", "pressure_at"]
 
-SKIP_REASONS = ("used", "gap", "clipped", "implausible", "spike", "speed", "low_speed")
+SKIP_REASONS = ("used", "gap", "clipped", "implausible", "spike", "speed", "low_speed", "rough")
 """Per corner and segment, why it was (not) used for k_t: index into this tuple.
 ``gap``: a missing (NaN) value; ``clipped``: three or more consecutive samples at the segment's
 extreme or at the sensor's range; ``implausible``: a value beyond ``max_accel_mps2`` or a dead
 (constant) channel; ``spike``: more than 0.2 % of an update's samples more than ``spike_z``
 robust standard deviations from the median (fewer are replaced by the median and counted as
 ``despiked``, and the window is used); ``speed``: speed not finite, negative or changing
-within the segment; ``low_speed``: the band does not reach past the wheel hop."""
+within the segment; ``low_speed``: the band does not reach past the wheel hop; ``rough``: the
+suspension hits its stops or the wheel leaves the ground more than ``max_nonlinear_share`` of the
+time (a corner model with a suspension law only): there no linear model holds."""
 
-_USED, _GAP, _CLIPPED, _IMPLAUSIBLE, _SPIKE, _SPEED, _LOW_SPEED = range(len(SKIP_REASONS))
+_USED, _GAP, _CLIPPED, _IMPLAUSIBLE, _SPIKE, _SPEED, _LOW_SPEED, _ROUGH = range(len(SKIP_REASONS))
 _LEVEL_BOUNDS = (np.log(1e-8), np.log(1e-1))  # log Gd(n0), m³
+_GRAVITY = 9.81  # m/s²
 
 
 @dataclass(frozen=True)
@@ -172,6 +177,17 @@ class MonitorConfig:
         A sample this many robust σ (1.4826 MAD) from the median is a spike.
     observable_sigma_kpa : float
         Above this σ a corner is flagged not observable, kPa.
+    travel_min_hz : float
+        Lowest frequency of the suspension travel's spectrum the equivalent linearization
+        integrates, Hz (below it the double integration of the accelerations amplifies noise).
+    rate_step : float
+        Relative step of the equivalent suspension rates the gain tables are made for (the
+        rate is rounded to the nearest: error ≤ half a step).
+    table_slots : int
+        Most gain tables (corner and rate) kept at once; the least recently used is replaced.
+    max_nonlinear_share : float
+        A window whose travel (Gaussian, as linearized) reaches the bump or rebound stop, or whose
+        wheel leaves the ground, more than this share of the time is not used for k_t (``rough``).
     """
 
     segment_s: float = 8.0
@@ -198,6 +214,10 @@ class MonitorConfig:
     max_accel_mps2: float = 1000.0
     spike_z: float = 8.0
     observable_sigma_kpa: float = 25.0
+    travel_min_hz: float = 0.5
+    rate_step: float = 0.02
+    table_slots: int = 32
+    max_nonlinear_share: float = 0.15
 
     def __post_init__(self) -> None:
         checks = [
@@ -242,6 +262,10 @@ class MonitorConfig:
             ("max_accel_mps2", self.max_accel_mps2 > 0, "> 0"),
             ("spike_z", self.spike_z > 3, "> 3"),
             ("observable_sigma_kpa", self.observable_sigma_kpa > 0, "> 0"),
+            ("travel_min_hz", 0 < self.travel_min_hz < self.max_frequency_hz, "(0, max_frequency_hz) Hz"),
+            ("rate_step", 0.001 <= self.rate_step <= 0.2, "0.001–0.2"),
+            ("table_slots", self.table_slots >= 1, "≥ 1"),
+            ("max_nonlinear_share", 0 < self.max_nonlinear_share <= 1, "(0, 1]"),
         ]
         for name, ok, allowed in checks:
             if not ok:
@@ -287,11 +311,12 @@ class MonitorUpdate:
 def _corner_terms(lam, beta, p_kpa, table, log_gain, dlog_gain, p_lo, p_step, proj, weight, x, log_cv):
     """Whittle log-likelihood, score and Fisher information per (corner, damping) in (λ_c, β, p).
 
-    `lam`, `beta` (C,): each row's log level and slope; `table` (C,): which corner's gain table a row
-    uses (rows may be memories × corners). r = exp(λ_c + β_c x + log_cv + log g(p));
+    `lam`, `beta` (C,): each row's log level and slope; `table` (C, B): which gain table (slot) row c
+    uses in bin b (rows may be memories × corners; a slot is a corner at a suspension rate).
+    r = exp(λ_c + β_c x + log_cv + log g(p));
     ℓ = −Σ w [log(1 + r) + P/(1 + r)];
     ∂ℓ/∂θ = Σ w q (P/(1+r) − 1) ∂log r/∂θ, I = Σ w q² (∂log r)(∂log r)ᵀ, q = r/(1 + r).
-    `log_gain` (C, D, P, F): log(|h|²/N) on the pressure grid p_lo + i·p_step (kPa), linearly
+    `log_gain` (S, D, P, F): log(|h|²/N) on the pressure grid p_lo + i·p_step (kPa), linearly
     interpolated; `dlog_gain` its derivative per kPa; `proj` (C, D, B, F); `weight` (C, B, F);
     `x`, (B, F) log(n/n0); `log_cv` (B,) log(4π² n0² v)."""
     n_c, n_d = p_kpa.shape
@@ -309,11 +334,11 @@ def _corner_terms(lam, beta, p_kpa, table, log_gain, dlog_gain, p_lo, p_step, pr
             i00 = i01 = i02 = i11 = i12 = i22 = 0.0
             acc = 0.0
             for b in range(n_b):
+                g = table[c, b]
                 for j in range(n_f):
                     wf = weight[c, b, j]
                     if wf == 0.0:
                         continue
-                    g = table[c]
                     lg = (1.0 - a) * log_gain[g, d, i, j] + a * log_gain[g, d, i + 1, j]
                     dl = (1.0 - a) * dlog_gain[g, d, i, j] + a * dlog_gain[g, d, i + 1, j]
                     xf = x[b, j]
@@ -558,32 +583,31 @@ class TyreMonitor:
         self._p_step = 1.0
         self._p_grid = np.arange(p_lo, p_hi + 0.5, self._p_step)
         n_d = cfg.damping_points
-        self._log_gain = np.empty((n_c, n_d, self._p_grid.size, self.freq.size))
-        self._u = np.empty((n_c, n_d, 2, self.freq.size), dtype=complex)
+        self._fine = fine
         self._hop_hz = np.empty(n_c)
         self.dampings = np.empty((n_c, n_d))
         for c, qc in enumerate(self.models):
-            law = asdict(self.tires[c])
-            kt = stiffness_from_pressure(self._p_grid * 1e3, **law)
-            if qc.damping_range is None:
-                cs = np.full(n_d, qc.damping)
-            else:
-                cs = np.linspace(qc.damping_range[0], qc.damping_range[1], n_d)
-            self.dampings[c] = cs
-            for d, cd in enumerate(cs):
-                model = replace(qc, damping=float(cd))
-                g = signal_gain(fine[None, :], kt[:, None], model) / self.noise  # the band's mean gain
-                g = np.add.reduceat(g, self._group_start, axis=1) / self._group_size
-                self._log_gain[c, d] = np.log(np.maximum(g, 1e-300))
-                self._u[c, d] = np.stack(signal_direction(self.freq, model))
-            kt_nom = stiffness_from_pressure(self.tires[c].p0, **law)
+            self.dampings[c] = (np.full(n_d, qc.damping) if qc.damping_range is None
+                                else np.linspace(qc.damping_range[0], qc.damping_range[1], n_d))  # fmt: skip
+            kt_nom = stiffness_from_pressure(self.tires[c].p0, **asdict(self.tires[c]))
             self._hop_hz[c] = math.sqrt((qc.spring_rate + kt_nom) / qc.unsprung_mass) / (2.0 * math.pi)
-        self._dlog_gain = np.gradient(self._log_gain, self._p_step, axis=2)
-        self._tables = np.arange(n_c)  # row c of the kernels uses corner c's tables
-        # u^H S u = |u1|² S11 + |u2|² S22 + 2 Re(conj(u1) u2 S12), each term (C, D, 1, F)
-        self._u11 = (np.abs(self._u[:, :, 0]) ** 2)[:, :, None, :] / self.noise
-        self._u22 = (np.abs(self._u[:, :, 1]) ** 2)[:, :, None, :] / self.noise
-        self._u12 = (2.0 * np.conj(self._u[:, :, 0]) * self._u[:, :, 1])[:, :, None, :] / self.noise
+        # gain tables, one per (corner, suspension rate): slot c holds corner c at its model's rate;
+        # equivalent rates (corners with a suspension law) get slots when first needed
+        # Σ_f S(f) Δf / (2πf)² per band (Δf = 1/segment_s): velocity from acceleration; /(2πf)² again: travel
+        omega2 = (2.0 * np.pi * self.freq) ** 2
+        in_travel = self.freq >= cfg.travel_min_hz
+        self._travel_weight = np.where(in_travel, self._group_size / (cfg.segment_s * omega2), 0.0)
+        self._slot_of: dict[tuple[int, int], int] = {}
+        self._slot_used = np.zeros(0, dtype=np.int64)
+        self._n_updates = 0
+        shape = (n_c, n_d, self._p_grid.size, self.freq.size)
+        self._log_gain, self._dlog_gain = np.empty(shape), np.empty(shape)
+        self._u11 = np.empty((n_c, n_d, 1, self.freq.size))
+        self._u22 = np.empty_like(self._u11)
+        self._u12 = np.empty(self._u11.shape, dtype=complex)
+        for c in range(n_c):
+            self._slot(c, 0)
+        self._nonlinear = any(qc.suspension is not None for qc in self.models)
         self._laws = np.array([[t.kt0, t.p0, t.pfz1] for t in self.tires]).T  # (3, C): eq. 3–4 per corner
         self._prior = np.array(
             [t.p0 / 1e3 if cfg.prior_pressure_kpa is None else cfg.prior_pressure_kpa for t in self.tires]
@@ -594,6 +618,96 @@ class TyreMonitor:
         self._beta_bounds = (2.0 - w_hi, 2.0 - w_lo)
         self._slope_free = self._beta_bounds[1] > self._beta_bounds[0]
         self.reset()
+
+    # ------------------------------------------------------------------ gain tables
+    def _fill_slot(self, slot: int, c: int, step: int, lift: int) -> None:
+        """Gain tables of corner c with its suspension rate times (1 + rate_step)^step and its tyre's
+        stiffness and damping times the contact share (1 + rate_step)^−lift, in `slot`.
+
+        log(|h|²/N) per damping, pressure and band (the band's mean gain), its derivative in p,
+        and the signal direction's terms u^H S u = |u1|² S11 + |u2|² S22 + 2 Re(conj(u1) u2 S12)."""
+        qc = self.models[c]
+        rate = qc.spring_rate * (1.0 + self.config.rate_step) ** step
+        contact = (1.0 + self.config.rate_step) ** -lift
+        kt = contact * stiffness_from_pressure(self._p_grid * 1e3, **asdict(self.tires[c]))
+        for d, cd in enumerate(self.dampings[c]):
+            model = replace(qc, damping=float(cd), spring_rate=rate, tire_damping=contact * qc.tire_damping)
+            g = signal_gain(self._fine[None, :], kt[:, None], model) / self.noise
+            g = np.add.reduceat(g, self._group_start, axis=1) / self._group_size
+            self._log_gain[slot, d] = np.log(np.maximum(g, 1e-300))
+            u1, u2 = signal_direction(self.freq, model)
+            self._u11[slot, d, 0] = np.abs(u1) ** 2 / self.noise
+            self._u22[slot, d, 0] = np.abs(u2) ** 2 / self.noise
+            self._u12[slot, d, 0] = 2.0 * np.conj(u1) * u2 / self.noise
+        self._dlog_gain[slot] = np.gradient(self._log_gain[slot], self._p_step, axis=1)
+
+    def _slot(self, c: int, step: int, lift: int = 0) -> int:
+        """Index of the gain tables of corner c at rate step `step` and contact step `lift`, made (or
+        recycled: the least recently used slot not used in this update) when missing."""
+        key = (c, step, lift)
+        slot = self._slot_of.get(key)
+        if slot is None:
+            n = self._slot_used.size
+            idle = np.flatnonzero(self._slot_used[len(self.models):] < self._n_updates) + len(self.models)
+            if n < self.config.table_slots or idle.size == 0:
+                slot = n  # grow
+                grow = lambda a: np.concatenate([a, np.empty((1,) + a.shape[1:], a.dtype)])  # noqa: E731
+                if n >= self._log_gain.shape[0]:
+                    self._log_gain, self._dlog_gain = grow(self._log_gain), grow(self._dlog_gain)
+                    self._u11, self._u22, self._u12 = grow(self._u11), grow(self._u22), grow(self._u12)
+                self._slot_used = np.append(self._slot_used, self._n_updates)
+            else:
+                slot = int(idle[np.argmin(self._slot_used[idle])])
+                del self._slot_of[next(k for k, v in self._slot_of.items() if v == slot)]
+            self._fill_slot(slot, c, step, lift)
+            self._slot_of[key] = slot
+        self._slot_used[slot] = self._n_updates
+        return slot
+
+    def _tables_for(self, corners: np.ndarray, spec: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Gain-table slots for spectra `spec` (..., F, 3) of corners `corners` (same leading shape),
+        and the share of time the linearization's Gaussian travel spends on a stop or the wheel off
+        the ground (0 for corners without a suspension law).
+
+        A corner whose model has a suspension law gets the tables of its equivalent rate
+        (:func:`suvtwin.suspension_law.equivalent_spring_rate`) at the travel's and travel
+        velocity's standard deviations, integrated from the spectrum of the relative acceleration
+        S11 + S22 − 2 Re S12 (less the two sensors' noise) above ``travel_min_hz``, and of its
+        tyre's equivalent stiffness and damping: the tyre pushes only while in contact, so its
+        statistically linearized rate is k_t·P(contact), with the dynamic wheel load
+        −(m_s a_s + m_us a_us) Gaussian of the std its spectrum gives and the static load
+        (m_s + m_us)·g: P(contact) = Φ(W/σ_F). The others get their model's tables."""
+        corners = np.asarray(corners)
+        out = corners.copy()
+        share = np.zeros(corners.shape)
+        if not self._nonlinear:
+            return out, share
+        rel = spec[..., 0].real + spec[..., 1].real - 2.0 * spec[..., 2].real  # S of a_s − a_u
+        rel = np.maximum(rel - 2.0 * self.noise, 0.0)
+        var_v = rel @ self._travel_weight
+        var_x = rel @ (self._travel_weight / (2.0 * np.pi * self.freq) ** 2)
+        band_df = self._travel_weight * (2.0 * np.pi * self.freq) ** 2  # Σ S Δf over the same band
+        log_step = math.log1p(self.config.rate_step)
+        for c in np.unique(corners):
+            qc = self.models[c]
+            if qc.suspension is None:
+                continue
+            here = corners == c
+            sub = spec[here]
+            ms, mu = qc.sprung_mass, qc.unsprung_mass
+            load = ms**2 * sub[..., 0].real + mu**2 * sub[..., 1].real + 2.0 * ms * mu * sub[..., 2].real
+            var_f = np.maximum(load - (ms**2 + mu**2) * self.noise, 0.0) @ band_df
+            contact = ndtr((ms + mu) * _GRAVITY / np.sqrt(np.maximum(var_f, 1e-12)))
+            lift = np.rint(-np.log(np.maximum(contact, 0.05)) / log_step).astype(int)
+            sd = np.sqrt(var_x[here])
+            mean, k_eq = equivalent_spring_rate(qc.suspension, qc.static_travel, sd, np.sqrt(var_v[here]))
+            steps = np.rint(np.log(np.maximum(k_eq / qc.spring_rate, 1e-3)) / log_step).astype(int)
+            out[here] = [self._slot(int(c), int(k), int(j)) for k, j in zip(steps, lift, strict=True)]
+            law = qc.suspension
+            stops = ndtr((mean - law.bump_clearance) / np.maximum(sd, 1e-9)) + ndtr(
+                (-mean - law.rebound_clearance) / np.maximum(sd, 1e-9))  # fmt: skip
+            share[here] = stops + (1.0 - contact)
+        return out, share
 
     # ------------------------------------------------------------------ state
     def reset(self) -> None:
@@ -830,12 +944,24 @@ class TyreMonitor:
                 if not whole[c]:
                     spec[i] = self._cross_spectra(a_s[-tail[c] :, c : c + 1], a_u[-tail[c] :, c : c + 1])[0]
             b = self._speed_bin(speed)
+            table = np.arange(n_c)[:, None]  # each corner's gain tables at this window's travel
+            table[used, 0], rough = self._tables_for(np.flatnonzero(used), spec)
+            rough_c = np.zeros(n_c, dtype=bool)
+            rough_c[used] = rough > cfg.max_nonlinear_share
+            if np.any(rough_c):  # no linear model holds: the window is not used for k_t
+                status[rough_c] = _ROUGH
+                s.counts["used"][rough_c] -= 1
+                s.counts["rough"][rough_c] += 1
+                spec = spec[~rough_c[used]]
+                used = used & ~rough_c
+                whole = whole & used
+                table[~used, 0] = np.arange(n_c)[~used]
             # 1. predictive scores of the memories for the new block (before it is added; whole
             # windows only: a block with a gap predicts nothing)
             scores = np.zeros((n_c, n_m))
             if np.any(whole):
                 newest = self._cross_spectra(block[2][:, whole], block[3][:, whole], own_grid=True)
-                scores = self._predictive_scores(newest, whole, speed, share)  # (C, M), 0 where not used
+                scores = self._predictive_scores(newest, whole, speed, share, table)  # (C, M), 0 where unused
             decay = math.exp(-elapsed / cfg.selection_s)
             s.score = decay * s.score + scores
             # 2. forget (lazily: the stored sums are divided by the accumulated factor) and add
@@ -857,7 +983,7 @@ class TyreMonitor:
             s.recent_spec[-1, used] = w[:, None, None] * spec
             s.recent_weight[-1] = np.where(used, w_c, 0.0)
             s.recent_speed[-1], s.recent_t[-1] = speed, t_end
-            s.recent_u[-1], s.recent_i[-1], s.recent_p[-1] = self._window_score(spec, used, speed, w_c)
+            s.recent_u[-1], s.recent_i[-1], s.recent_p[-1] = self._window_score(spec, used, speed, w_c, table)
             start = self._change_test(used)
             for c in np.flatnonzero(start >= 0):
                 self._rebuild(c, int(start[c]), t_end)
@@ -866,6 +992,7 @@ class TyreMonitor:
         else:
             self._forget(elapsed)  # time passes: memories fade
         s.fits = self._fit_all(s.fits)
+        self._n_updates += 1
         return self._output(t_end, speed, status, restarts)
 
     def _speed_bin(self, speed: float) -> int:
@@ -903,7 +1030,7 @@ class TyreMonitor:
         out[hit] = best[hit]
         return out
 
-    def _terms_at(self, fit: _Fit, proj, weight, x, log_cv):
+    def _terms_at(self, fit: _Fit, table, proj, weight, x, log_cv):
         """:func:`_corner_terms` at a memory's estimate, each corner with its likelier slope model;
         also that model's damping weights (C, D)."""
         n_c = len(self.models)
@@ -912,14 +1039,15 @@ class TyreMonitor:
         lam = np.ascontiguousarray(fit.lam[v, pick])
         lam = np.where(np.isfinite(lam), lam, math.log(1e-5))
         ll, score, info = _corner_terms(
-            lam, np.ascontiguousarray(fit.beta[v, pick]), np.ascontiguousarray(fit.p[v, pick]), self._tables,
+            lam, np.ascontiguousarray(fit.beta[v, pick]), np.ascontiguousarray(fit.p[v, pick]), table,
             self._log_gain, self._dlog_gain, float(self._p_grid[0]), self._p_step, proj, weight, x, log_cv,
         )  # fmt: skip
         return ll, score, info, fit.wd[v, pick]
 
-    def _window_score(self, spec: np.ndarray, used: np.ndarray, speed: float, w: np.ndarray):
-        """Score and information in p of one window (its corners `used`, weights `w` (C,)) at the longest
-        memory's estimate, and that estimate: three (C,) arrays (zero for corners not used)."""
+    def _window_score(self, spec: np.ndarray, used: np.ndarray, speed: float, w: np.ndarray, table):
+        """Score and information in p of one window (its corners `used`, weights `w` (C,), gain-table
+        slots `table` (C, 1)) at the longest memory's estimate, and that estimate: three (C,) arrays
+        (zero for corners not used)."""
         s = self._state
         n_c = len(self.models)
         zeros = np.zeros(n_c)
@@ -930,7 +1058,7 @@ class TyreMonitor:
         full[used, 0] = spec
         weight, x, log_cv = self._band(np.array([speed]))
         weight = (w * used)[:, None, None] * weight[None]
-        _, score, info, wd = self._terms_at(fit, self._project(full), weight, x, log_cv)
+        _, score, info, wd = self._terms_at(fit, table, self._project(full, table), weight, x, log_cv)
         u = np.einsum("cd,cd->c", wd, score[..., 2])
         i = np.einsum("cd,cd->c", wd, info[..., 2, 2])
         return u, i, np.where(used, fit.p_mean, 0.0)
@@ -992,12 +1120,13 @@ class TyreMonitor:
         fine[..., 2] = X[0] * np.conj(X[1]) * k
         return np.add.reduceat(fine, self._group_start, axis=1) / self._group_size[:, None]
 
-    def _project(self, spec: np.ndarray, table: np.ndarray | None = None) -> np.ndarray:
-        """u^H S u / N for each damping: spec (R, B, F, 3) → (R, D, B, F); row r is corner `table[r]`
-        (default: row c is corner c)."""
+    def _project(self, spec: np.ndarray, table: np.ndarray) -> np.ndarray:
+        """u^H S u / N for each damping: spec (R, B, F, 3) → (R, D, B, F), row r and bin b with the
+        signal direction of gain-table slot `table[r, b]`."""
+        u11 = self._u11[table][..., 0, :].transpose(0, 2, 1, 3)  # (R, D, B, F)
+        u22 = self._u22[table][..., 0, :].transpose(0, 2, 1, 3)
+        u12 = self._u12[table][..., 0, :].transpose(0, 2, 1, 3)
         sp = spec[:, None]
-        u11, u22, u12 = (self._u11, self._u22, self._u12) if table is None else (
-            self._u11[table], self._u22[table], self._u12[table])  # fmt: skip
         return u11 * sp[..., 0].real + u22 * sp[..., 1].real + (u12 * sp[..., 2]).real
 
     def _band(self, speeds: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -1013,9 +1142,10 @@ class TyreMonitor:
         return weight, np.log(f / (N0 * v)), np.log(4.0 * np.pi**2 * N0**2 * speeds)
 
     def _predictive_scores(
-        self, spec: np.ndarray, used: np.ndarray, speed: float, share: float
+        self, spec: np.ndarray, used: np.ndarray, speed: float, share: float, table: np.ndarray
     ) -> np.ndarray:
-        """Expected log predictive density of the newest block under each memory, (C, M).
+        """Expected log predictive density of the newest block under each memory, (C, M), with the
+        window's gain-table slots `table` (C, 1).
 
         `spec`: the block's periodogram zero-padded to the window, whose bins are correlated over
         window/block neighbours: its Whittle log-likelihood is weighted by `share` = block/window."""
@@ -1025,13 +1155,13 @@ class TyreMonitor:
         corners = np.flatnonzero(used)
         full = np.zeros((n_c, 1, self.freq.size, 3), dtype=complex)
         full[corners, 0] = spec
-        proj = self._project(full)  # (C, D, 1, F)
+        proj = self._project(full, table)  # (C, D, 1, F)
         mask, x, log_cv = self._band(np.array([speed]))
         weight = share * used[:, None, None] * mask[None]  # (C, 1, F): the unused corners weigh nothing
         for m, fit in enumerate(s.fits):
             if fit is None or not fit.has_data:
                 continue
-            ll, _, info, wd = self._terms_at(fit, proj, weight, x, log_cv)
+            ll, _, info, wd = self._terms_at(fit, table, proj, weight, x, log_cv)
             plug_in = _logsumexp(ll + np.log(np.maximum(wd, 1e-300)), axis=1)
             i_pp = np.einsum("cd,cd->c", wd, info[:, :, 2, 2])
             i_ll = np.einsum("cd,cd->c", wd, info[:, :, 0, 0])
@@ -1073,8 +1203,10 @@ class TyreMonitor:
         band, x, log_cv = self._band(speeds)
         stored = s.weight[:, :, bins]
         mean_spec = s.spec[:, :, bins] / np.maximum(stored, 1e-300)[..., None, None]
-        table = np.tile(np.arange(n_c), n_m)
-        proj = self._project(mean_spec.reshape(rows, bins.size, self.freq.size, 3), table)  # (rows, D, B, F)
+        mean_spec = mean_spec.reshape(rows, bins.size, self.freq.size, 3)
+        row_corner = np.tile(np.arange(n_c), n_m)
+        table, _ = self._tables_for(np.repeat(row_corner[:, None], bins.size, axis=1), mean_spec)
+        proj = self._project(mean_spec, table)  # (rows, D, B, F)
         weight = Wb.reshape(rows, bins.size)[:, :, None] * band[None]  # (rows, B, F)
         total = W.sum(axis=2).reshape(rows)
         eff = (s.weight2.sum(axis=2) * s.scale[:, None] ** 2).reshape(rows) / np.maximum(total, 1e-300)
@@ -1087,7 +1219,8 @@ class TyreMonitor:
         cold = [m for m in range(n_m) if previous[m] is None or not previous[m].has_data]
         if cold:
             rows_cold = np.concatenate([np.arange(m * n_c, (m + 1) * n_c) for m in cold])
-            lam_c, p_c = self._cold_start(proj[rows_cold], weight[rows_cold], log_cv, table[rows_cold])
+            lam_c, p_c = self._cold_start(proj[rows_cold], weight[rows_cold], log_cv, table[rows_cold],
+                                          np.tile(np.arange(n_c), n_m)[rows_cold])  # fmt: skip
             lam0[:, rows_cold], p0[:, rows_cold] = lam_c, p_c
         for m in range(n_m):
             if m in cold:
@@ -1149,11 +1282,11 @@ class TyreMonitor:
             ))  # fmt: skip
         return out
 
-    def _cold_start(self, proj, weight, log_cv, table) -> tuple[np.ndarray, np.ndarray]:
+    def _cold_start(self, proj, weight, log_cv, table, corner) -> tuple[np.ndarray, np.ndarray]:
         """First guess per row: the joint estimator's 5 kPa grid with the level profiled, w = 2.
 
-        `table` (rows,): each row's corner. Returns each row's log level (rows,) and pressure
-        (rows, D), kPa."""
+        `table` (rows, B): each row's gain-table slot per bin; `corner` (rows,): its corner. Returns
+        each row's log level (rows,) and pressure (rows, D), kPa."""
         n_r, n_d = proj.shape[:2]
         d = n_d // 2
         grid = np.arange(0, self._p_grid.size, 5)
@@ -1162,11 +1295,12 @@ class TyreMonitor:
         bounds = (np.full((1, 1), _LEVEL_BOUNDS[0]), np.full((1, 1), _LEVEL_BOUNDS[1]))
         for r in range(n_r):
             w = weight[r].reshape(1, -1)
-            c = int(table[r])
+            c = int(corner[r])
             if not np.any(w > 0):
                 p0[r] = self._prior[c]
                 continue
-            gain = np.exp(self._log_gain[c, d][grid][:, None, :] + log_cv[None, :, None])
+            log_gain = self._log_gain[table[r], d][:, grid].transpose(1, 0, 2)  # (P, B, F)
+            gain = np.exp(log_gain + log_cv[None, :, None])
             gain = gain.reshape(grid.size, -1)
             ll, lam_r, fisher = profile_loglik(proj[r, d].reshape(1, -1), gain, w, log_sv_bounds=bounds)
             best = int(np.argmax(ll[0] - 0.5 * np.log(np.maximum(fisher[0], 1e-300))))

@@ -20,14 +20,16 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from suvtwin import suspension_law
 from suvtwin.errors import InputError
 from suvtwin.estimators.joint import LinearQuarterCar
 from suvtwin.estimators.quarter_car import sprung_mass_share
 from suvtwin.files import atomic_write, read_parquet_table
 from suvtwin.mjcf.tire import load_tire
-from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
+from suvtwin.mjcf.vehicle import CORNERS, GRAVITY, load_vehicle
 from suvtwin.pipeline.estimator_registry import CornerSignals, estimate_columns, find_estimator
 from suvtwin.pipeline.scoring import PRESSURE_TOLERANCE_KPA, run_metrics
+from suvtwin.suspension_law import SuspensionLaw
 
 __all__ = [
     "EstimateRun",
@@ -144,6 +146,33 @@ def run_load_and_tire(meta: dict, path: str | Path) -> tuple[float, str | None]:
     return float(sum(item.get("mass_kg", 0.0) for item in scenario.get("load", []))), tire_file
 
 
+def run_loads(meta: dict) -> tuple[tuple[float, tuple[float, float, float]], ...]:
+    """The extra loads of a run, from its metadata: (mass in kg, position in m from the chassis CoG,
+    x forward, y left, z up) each."""
+    items = meta.get("scenario", {}).get("load", [])
+    return tuple((float(i.get("mass_kg", 0.0)), tuple(float(x) for x in i.get("position_m", (0.0, 0.0, 0.0))))
+                 for i in items)  # fmt: skip
+
+
+def corner_static_travel(corner: str, loads=()) -> float:
+    """Static suspension compression (m) of the SUV's `corner` under extra `loads` (:func:`run_loads`).
+
+    Each load's weight goes to the axles by its lever arms about them (a1, a2 from the CoG) and to
+    an axle's wheels by its lateral offset over the track; the corner's spring
+    (:class:`suvtwin.suspension_law.SuspensionLaw`, progression and stops included) carries that
+    force beyond its preload (:func:`suvtwin.suspension_law.static_travel`)."""
+    vehicle = load_vehicle()
+    chassis = vehicle.chassis
+    front, left = corner.startswith("f"), corner.endswith("l")
+    track = chassis.track_front if front else chassis.track_rear
+    force = 0.0
+    for mass, (x, y, _) in loads:
+        axle = (chassis.a2 + x) / vehicle.wheelbase if front else (chassis.a1 - x) / vehicle.wheelbase
+        force += mass * GRAVITY * axle * (0.5 + (y if left else -y) / track)
+    law = SuspensionLaw.of(vehicle.suspension, spring_rate=float(vehicle.spring_rate[CORNERS.index(corner)]))
+    return float(suspension_law.static_travel(law, force))
+
+
 def corner_sprung_mass(corner: str, load_kg: float = 0.0) -> float:
     """The SUV corner's sprung mass with `load_kg` of extra load, kg (paper 000 eq. 2)."""
     vehicle = load_vehicle()
@@ -157,7 +186,7 @@ def corner_sprung_mass(corner: str, load_kg: float = 0.0) -> float:
 
 
 def linear_corner_model(
-    corner: str, sprung_mass: float, *, tire_file: str | Path | None = None
+    corner: str, sprung_mass: float, *, tire_file: str | Path | None = None, static_travel: float = 0.0
 ) -> LinearQuarterCar:
     """The SUV corner as a linear roll-plane corner model for the joint estimator.
 
@@ -169,7 +198,9 @@ def linear_corner_model(
     (``damping`` is the low-speed mean). Leaving out the anti-roll bar or the digressive damper
     biases the pressure high; ``python bench/joint_mujoco.py`` compares this model with the plain
     quarter car on a campaign's MuJoCo runs. `tire_file`: the tyre of the run (``.tir``, its radial
-    damping), default the SUV's."""
+    damping), default the SUV's. The corner's non-linear spring and damper laws come with it
+    (``suspension``) and `static_travel` (m, :func:`corner_static_travel`), for estimators that
+    linearize them at the measured travel (the online monitor)."""
     vehicle = load_vehicle()
     s = vehicle.suspension
     i = CORNERS.index(corner)
@@ -187,6 +218,8 @@ def linear_corner_model(
             0.5 * (s.damper_compression_high + s.damper_rebound_high),
             0.5 * (s.damper_compression_low + s.damper_rebound_low),
         ),
+        suspension=SuspensionLaw.of(s, spring_rate=float(vehicle.spring_rate[i])),
+        static_travel=float(static_travel),
     )
 
 

@@ -28,8 +28,10 @@ from suvtwin.mjcf.vehicle import CORNERS
 from suvtwin.pipeline.estimation import (
     check_time_axis,
     corner_sprung_mass,
+    corner_static_travel,
     linear_corner_model,
     run_load_and_tire,
+    run_loads,
 )
 from suvtwin.tire_stiffness import tire_stiffness_of
 
@@ -47,9 +49,16 @@ class MonitorResult:
     update: MonitorUpdate
 
 
-def corner_models(corners: tuple[str, ...], *, load_kg: float = 0.0, tire_file: str | Path | None = None):
-    """The SUV's linear corner models of `corners`, with `load_kg` of extra load on the chassis."""
-    return [linear_corner_model(c, corner_sprung_mass(c, load_kg), tire_file=tire_file) for c in corners]
+def corner_models(corners: tuple[str, ...], *, loads=(), tire_file: str | Path | None = None):
+    """The SUV's linear corner models of `corners` with extra `loads` on the chassis ((kg, (x, y, z) m)
+    each, :func:`suvtwin.pipeline.estimation.run_loads`): their total mass shared as in paper 000
+    eq. 2, and each corner's static travel under them."""
+    load_kg = float(sum(m for m, _ in loads))
+    return [
+        linear_corner_model(c, corner_sprung_mass(c, load_kg), tire_file=tire_file,
+                            static_travel=corner_static_travel(c, loads))
+        for c in corners
+    ]  # fmt: skip
 
 
 def monitor_signals(
@@ -59,20 +68,21 @@ def monitor_signals(
     acc_unsprung: np.ndarray,
     *,
     corners: tuple[str, ...] = CORNERS,
-    load_kg: float = 0.0,
+    loads=(),
     tire_file: str | Path | None = None,
     config: MonitorConfig | None = None,
     chunk_s: float = 10.0,
 ) -> tuple[TyreMonitor, MonitorUpdate]:
     """Stream arrays through a new monitor in chunks of `chunk_s` s; the monitor and all its rows.
 
-    `acc_sprung`, `acc_unsprung`: (T, C) in the order of `corners`."""
+    `acc_sprung`, `acc_unsprung`: (T, C) in the order of `corners`; `loads`: the extra loads on the
+    chassis, (kg, (x, y, z) m from the CoG) each (:func:`corner_models`)."""
     t = np.asarray(t_s, dtype=float)
     if t.size < 2:
         raise InputError("a run needs at least two samples")
     dt = float(np.median(np.diff(t)))
     monitor = TyreMonitor(
-        corner_models(corners, load_kg=load_kg, tire_file=tire_file), dt=dt, config=config,
+        corner_models(corners, loads=loads, tire_file=tire_file), dt=dt, config=config,
         tire=[tire_stiffness_of(tire_file)] * len(corners), names=corners,
     )  # fmt: skip
     step = max(int(round(chunk_s / dt)), 1)
@@ -122,10 +132,11 @@ def monitor_run(
     raw = (table.schema.metadata or {}).get(b"suvtwin.run")
     meta = json.loads(raw) if raw else {}
     load, tire_file = run_load_and_tire(meta, path)
+    loads = run_loads(meta)
     acc_s = frame[[f"{c}_accel_sprung_mps2" for c in corners]].to_numpy(dtype=float)
     acc_u = frame[[f"{c}_accel_unsprung_mps2" for c in corners]].to_numpy(dtype=float)
     monitor, update = monitor_signals(
-        t, frame["speed_mps"].to_numpy(dtype=float), acc_s, acc_u, corners=corners, load_kg=load,
+        t, frame["speed_mps"].to_numpy(dtype=float), acc_s, acc_u, corners=corners, loads=loads,
         tire_file=tire_file, config=config, chunk_s=chunk_s,
     )  # fmt: skip
     rule = rule or DeflationRule()
@@ -151,6 +162,7 @@ def monitor_run(
         "corners": list(corners),
         "tire_file": tire_file,
         "load_kg": load,
+        "static_travel_mm": dict(zip(corners, [1e3 * m.static_travel for m in monitor.models], strict=True)),
         "placard_kpa": placard_kpa,
         "reset_at_s": None if placard_kpa is not None else float(t[0] if reset_at_s is None else reset_at_s),
         "config": asdict(monitor.config),
