@@ -45,13 +45,13 @@ References
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 import numpy.typing as npt
-from scipy.special import ndtr
 
 from suvtwin.errors import InputError
+from suvtwin.jit import cached_njit
 
 __all__ = [
     "SuspensionLaw",
@@ -67,6 +67,8 @@ __all__ = [
 ]
 
 _SQRT_2PI = math.sqrt(2.0 * math.pi)
+_SQRT_2 = math.sqrt(2.0)
+_SIGMA_FLOOR = 1e-9  # σ → 0: the deterministic limit
 
 
 @dataclass(frozen=True)
@@ -107,6 +109,11 @@ class SuspensionLaw:
             if not getattr(self, name) > 0.0:
                 raise InputError(f"suspension {name} must be > 0, got {getattr(self, name)!r}")
 
+    @property
+    def values(self) -> np.ndarray:
+        """The 13 values in field order, for the compiled functions."""
+        return np.array([getattr(self, f.name) for f in fields(self)], dtype=float)
+
     @classmethod
     def of(cls, suspension, *, spring_rate: float) -> SuspensionLaw:
         """The law of a corner of a vehicle's ``Suspension`` parameters (``suvtwin.mjcf.vehicle``)
@@ -123,31 +130,148 @@ class SuspensionLaw:
         )  # fmt: skip
 
 
+@cached_njit
+def _pm(n, mu, sd):
+    """:func:`partial_moment` of one (μ, σ), compiled."""
+    z = mu / sd
+    cdf = 0.5 * math.erfc(-z / _SQRT_2)
+    pdf = math.exp(-0.5 * z * z) / _SQRT_2PI
+    if n == 0:
+        return cdf
+    if n == 1:
+        return mu * cdf + sd * pdf
+    if n == 2:
+        return (mu * mu + sd * sd) * cdf + mu * sd * pdf
+    return (mu**3 + 3.0 * mu * sd * sd) * cdf + sd * pdf * (mu * mu + 2.0 * sd * sd)
+
+
+@cached_njit
+def _mean_force(q, m, sd):
+    """E[F_s(m + x)] − F_s(0), x ~ N(0, sd²); `q` the law's :attr:`SuspensionLaw.values`."""
+    k, prog, cb, b1, b2, cr, r1, r2 = q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7]
+    out = k * m + k * prog * _pm(3, m, sd)
+    if not math.isinf(cb):
+        out += b1 * _pm(1, m - cb, sd) + b2 * _pm(2, m - cb, sd)
+    if not math.isinf(cr):
+        out -= r1 * _pm(1, -m - cr, sd) + r2 * _pm(2, -m - cr, sd)
+    return out
+
+
+@cached_njit
+def _mean_rate(q, m, sd):
+    """E[F_s'(m + x)], x ~ N(0, sd²)."""
+    k, prog, cb, b1, b2, cr, r1, r2 = q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7]
+    out = k * (1.0 + 3.0 * prog * _pm(2, m, sd))
+    if not math.isinf(cb):
+        out += b1 * _pm(0, m - cb, sd) + 2.0 * b2 * _pm(1, m - cb, sd)
+    if not math.isinf(cr):
+        out += r1 * _pm(0, -m - cr, sd) + 2.0 * r2 * _pm(1, -m - cr, sd)
+    return out
+
+
+@cached_njit
+def _mean_damper(q, sv):
+    """E[F_d(v)], v ~ N(0, sv²)."""
+    c_lo, c_hi, r_lo, r_hi, knee = q[8], q[9], q[10], q[11], q[12]
+    half = sv / _SQRT_2PI
+    beyond = 0.0 if math.isinf(knee) else _pm(1, -knee, sv)
+    return (c_lo * half - (c_lo - c_hi) * beyond) - (r_lo * half - (r_lo - r_hi) * beyond)
+
+
+@cached_njit
+def _force(q, s):
+    """F_s(s) − F_s(0)."""
+    k, prog, cb, b1, b2, cr, r1, r2 = q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7]
+    out = k * s + (k * prog * s**3 if s > 0.0 else 0.0)
+    if s > cb:
+        out += b1 * (s - cb) + b2 * (s - cb) ** 2
+    if -s > cr:
+        out -= r1 * (-s - cr) + r2 * (-s - cr) ** 2
+    return out
+
+
+@cached_njit
+def _rate(q, s):
+    """F_s'(s)."""
+    k, prog, cb, b1, b2, cr, r1, r2 = q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7]
+    out = k * (1.0 + (3.0 * prog * s * s if s > 0.0 else 0.0))
+    if s > cb:
+        out += b1 + 2.0 * b2 * (s - cb)
+    if -s > cr:
+        out += r1 + 2.0 * r2 * (-s - cr)
+    return out
+
+
+@cached_njit
+def _equivalent(q, s0, sd, sv):
+    """Mean travel and equivalent rate (see :func:`equivalent_spring_rate`), one corner state."""
+    target = _force(q, s0) - _mean_damper(q, sv)
+    m = s0
+    for _ in range(60):
+        step = (_mean_force(q, m, sd) - target) / _mean_rate(q, m, sd)
+        step = min(max(step, -0.05), 0.05)
+        m -= step
+        if abs(step) < 1e-10:
+            break
+    return m, _mean_rate(q, m, sd)
+
+
+@cached_njit
+def _kernel(which, q, a, b, c, out0, out1):
+    """Apply one law function elementwise over flat arrays a, b, c (unused ones ignored)."""
+    for i in range(a.size):
+        if which == 0:
+            out0[i] = _mean_force(q, a[i], max(b[i], _SIGMA_FLOOR))
+        elif which == 1:
+            out0[i] = _mean_rate(q, a[i], max(b[i], _SIGMA_FLOOR))
+        elif which == 2:
+            out0[i] = _mean_damper(q, max(a[i], _SIGMA_FLOOR))
+        elif which == 3:
+            out0[i] = _force(q, a[i])
+        elif which == 4:
+            out0[i] = _rate(q, a[i])
+        elif which == 5:
+            s = b[i] / q[0]  # static travel: F_s(s) − F_s(0) = b (Newton; F_s increases)
+            for _ in range(60):
+                step = (_force(q, s) - b[i]) / _rate(q, s)
+                s -= step
+                if abs(step) < 1e-12:
+                    break
+            out0[i] = s
+        elif which == 6:
+            out0[i], out1[i] = _equivalent(q, a[i], max(b[i], _SIGMA_FLOOR), max(c[i], _SIGMA_FLOOR))
+        else:
+            out0[i] = _pm(int(c[i]), a[i], b[i])
+
+
+def _apply(which: int, law_values: np.ndarray, *args) -> tuple[np.ndarray, np.ndarray]:
+    arrays = np.broadcast_arrays(*[np.asarray(x, dtype=float) for x in args])
+    shape = arrays[0].shape
+    flat = [np.ascontiguousarray(x).ravel() for x in arrays] + [np.zeros(1)] * (3 - len(arrays))
+    flat = [f if f.size == flat[0].size else np.zeros(flat[0].size) for f in flat]
+    out0, out1 = np.empty(flat[0].size), np.empty(flat[0].size)
+    _kernel(which, law_values, flat[0], flat[1], flat[2], out0, out1)
+    return out0.reshape(shape), out1.reshape(shape)
+
+
+def partial_moment(n: int, mu: npt.ArrayLike, sigma: npt.ArrayLike) -> np.ndarray:
+    r""":math:`E[Y^n\,[Y > 0]]` for :math:`Y \sim N(\mu, \sigma^2)`, n = 0…3 (σ > 0).
+
+    With :math:`z = \mu/\sigma`, Φ and φ the standard normal cdf and pdf: Φ;
+    μΦ + σφ; (μ² + σ²)Φ + μσφ; (μ³ + 3μσ²)Φ + σφ(μ² + 2σ²)."""
+    if n not in (0, 1, 2, 3):
+        raise ValueError(f"partial_moment: n must be 0–3, got {n}")
+    return _apply(7, np.zeros(13), mu, sigma, float(n))[0]
+
+
 def spring_force(s: npt.ArrayLike, law: SuspensionLaw) -> np.ndarray:
     """Spring and stop force beyond the preload, :math:`F_s(s) - F_s(0)`, N, at compression `s` (m)."""
-    s = np.asarray(s, dtype=float)
-    k = law.spring_rate
-    out = k * s + k * law.progression * np.maximum(s, 0.0) ** 3
-    if math.isfinite(law.bump_clearance):
-        eb = np.maximum(s - law.bump_clearance, 0.0)
-        out = out + law.bump_linear * eb + law.bump_quadratic * eb**2
-    if math.isfinite(law.rebound_clearance):
-        er = np.maximum(-s - law.rebound_clearance, 0.0)
-        out = out - law.rebound_linear * er - law.rebound_quadratic * er**2
-    return out
+    return _apply(3, law.values, s)[0]
 
 
 def spring_rate(s: npt.ArrayLike, law: SuspensionLaw) -> np.ndarray:
     """Local rate :math:`F_s'(s)`, N/m, at compression `s` (m)."""
-    s = np.asarray(s, dtype=float)
-    out = law.spring_rate * (1.0 + 3.0 * law.progression * np.maximum(s, 0.0) ** 2)
-    if math.isfinite(law.bump_clearance):
-        eb = s - law.bump_clearance
-        out = out + np.where(eb > 0.0, law.bump_linear + 2.0 * law.bump_quadratic * eb, 0.0)
-    if math.isfinite(law.rebound_clearance):
-        er = -s - law.rebound_clearance
-        out = out + np.where(er > 0.0, law.rebound_linear + 2.0 * law.rebound_quadratic * er, 0.0)
-    return out
+    return _apply(4, law.values, s)[0]
 
 
 def damper_force(v: npt.ArrayLike, law: SuspensionLaw) -> np.ndarray:
@@ -160,59 +284,14 @@ def damper_force(v: npt.ArrayLike, law: SuspensionLaw) -> np.ndarray:
     return np.where(v >= 0.0, comp, -reb)
 
 
-def partial_moment(n: int, mu: npt.ArrayLike, sigma: npt.ArrayLike) -> np.ndarray:
-    r""":math:`E[Y^n\,[Y > 0]]` for :math:`Y \sim N(\mu, \sigma^2)`, n = 0…3 (σ > 0).
-
-    With :math:`z = \mu/\sigma`, Φ and φ the standard normal cdf and pdf: Φ;
-    μΦ + σφ; (μ² + σ²)Φ + μσφ; (μ³ + 3μσ²)Φ + σφ(μ² + 2σ²)."""
-    mu = np.asarray(mu, dtype=float)
-    sigma = np.asarray(sigma, dtype=float)
-    z = mu / sigma
-    cdf = ndtr(z)
-    pdf = np.exp(-0.5 * z * z) / _SQRT_2PI
-    if n == 0:
-        return cdf
-    if n == 1:
-        return mu * cdf + sigma * pdf
-    if n == 2:
-        return (mu * mu + sigma * sigma) * cdf + mu * sigma * pdf
-    if n == 3:
-        return (mu**3 + 3.0 * mu * sigma * sigma) * cdf + sigma * pdf * (mu * mu + 2.0 * sigma * sigma)
-    raise ValueError(f"partial_moment: n must be 0–3, got {n}")
-
-
-def _floor(sigma: npt.ArrayLike) -> np.ndarray:
-    return np.maximum(np.asarray(sigma, dtype=float), 1e-9)  # σ → 0: the deterministic limit
-
-
 def gaussian_spring_force(law: SuspensionLaw, mean: npt.ArrayLike, sigma: npt.ArrayLike) -> np.ndarray:
     """:math:`E[F_s(m + x)] - F_s(0)`, N, for travel `mean` m and std `sigma` σ (m), x Gaussian."""
-    m, sd = np.asarray(mean, dtype=float), _floor(sigma)
-    k = law.spring_rate
-    out = k * m + k * law.progression * partial_moment(3, m, sd)
-    if math.isfinite(law.bump_clearance):
-        e = m - law.bump_clearance
-        out = out + law.bump_linear * partial_moment(1, e, sd) + law.bump_quadratic * partial_moment(2, e, sd)
-    if math.isfinite(law.rebound_clearance):
-        e = -m - law.rebound_clearance
-        out = out - law.rebound_linear * partial_moment(1, e, sd)
-        out = out - law.rebound_quadratic * partial_moment(2, e, sd)
-    return out
+    return _apply(0, law.values, mean, sigma)[0]
 
 
 def gaussian_spring_rate(law: SuspensionLaw, mean: npt.ArrayLike, sigma: npt.ArrayLike) -> np.ndarray:
     """Equivalent (statistically linearized) rate :math:`E[F_s'(m + x)]`, N/m, x ~ N(0, σ²)."""
-    m, sd = np.asarray(mean, dtype=float), _floor(sigma)
-    out = law.spring_rate * (1.0 + 3.0 * law.progression * partial_moment(2, m, sd))
-    if math.isfinite(law.bump_clearance):
-        e = m - law.bump_clearance
-        out = out + law.bump_linear * partial_moment(0, e, sd)
-        out = out + 2.0 * law.bump_quadratic * partial_moment(1, e, sd)
-    if math.isfinite(law.rebound_clearance):
-        e = -m - law.rebound_clearance
-        out = out + law.rebound_linear * partial_moment(0, e, sd)
-        out = out + 2.0 * law.rebound_quadratic * partial_moment(1, e, sd)
-    return out
+    return _apply(1, law.values, mean, sigma)[0]
 
 
 def gaussian_damper_force(law: SuspensionLaw, sigma_velocity: npt.ArrayLike) -> np.ndarray:
@@ -221,25 +300,13 @@ def gaussian_damper_force(law: SuspensionLaw, sigma_velocity: npt.ArrayLike) -> 
     Each side is :math:`c_{lo} E[|v|; side] - (c_{lo} - c_{hi}) E[(|v| - v_k)^+; side]`, with
     :math:`E[v^+] = σ_v/\\sqrt{2π}` and the knee term the partial moment of order 1 at
     :math:`μ = -v_k`; negative when rebound damps more than compression."""
-    sv = _floor(sigma_velocity)
-    half = sv / _SQRT_2PI
-    beyond = partial_moment(1, -law.knee_velocity, sv) if math.isfinite(law.knee_velocity) else 0.0 * sv
-    comp = law.compression_low * half - (law.compression_low - law.compression_high) * beyond
-    reb = law.rebound_low * half - (law.rebound_low - law.rebound_high) * beyond
-    return comp - reb
+    return _apply(2, law.values, sigma_velocity)[0]
 
 
 def static_travel(law: SuspensionLaw, extra_force: npt.ArrayLike) -> np.ndarray:
     """Compression (m) at which the spring carries `extra_force` (N) beyond its preload:
     the solution of :math:`F_s(s) - F_s(0) = ΔF` (Newton; F_s is increasing)."""
-    target = np.asarray(extra_force, dtype=float)
-    s = target / law.spring_rate
-    for _ in range(60):
-        step = (spring_force(s, law) - target) / spring_rate(s, law)
-        s = s - step
-        if np.all(np.abs(step) < 1e-12):
-            break
-    return s
+    return _apply(5, law.values, 0.0, extra_force)[0]
 
 
 def equivalent_spring_rate(
@@ -254,16 +321,6 @@ def equivalent_spring_rate(
     load); `sigma` σ (m) and `sigma_velocity` σ_v (m/s): the travel's and its velocity's
     standard deviations. m solves :math:`E[F_s(m + x)] = F_s(s_0) - F_s(0) - E[F_d(v)]` (the
     average forces carry the static load; Newton, :math:`\partial_m E[F_s(m + x)] = k_{eq}(m)`),
-    and :math:`k_{eq} = E[F_s'(m + x)]`. Arrays broadcast."""
-    s0 = np.asarray(static, dtype=float)
-    sd = _floor(sigma)
-    target = spring_force(s0, law) - gaussian_damper_force(law, sigma_velocity)
-    m = np.broadcast_to(s0, np.broadcast(s0, sd, target).shape).astype(float)
-    for _ in range(60):
-        rate = gaussian_spring_rate(law, m, sd)
-        step = (gaussian_spring_force(law, m, sd) - target) / rate
-        step = np.clip(step, -0.05, 0.05)
-        m = m - step
-        if np.all(np.abs(step) < 1e-10):
-            break
-    return m, gaussian_spring_rate(law, m, sd)
+    and :math:`k_{eq} = E[F_s'(m + x)]`. Arrays broadcast; compiled (the online monitor calls it
+    at every update)."""
+    return _apply(6, law.values, static, sigma, sigma_velocity)
