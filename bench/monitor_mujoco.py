@@ -199,7 +199,7 @@ def main(argv: list[str] | None = None) -> dict:
         }
     if mon_costs:
         out.setdefault("monitor", {})["failed"] = {k: v for c in mon_costs for k, v in c["failed"].items()}
-        scores = score_set(args.set, traces, [r.info for r in scored])
+        scores = score_set(args.set, traces, [{**r.info, "name": r.name} for r in scored])
         out["targets"] = issue_targets(args.set, scores)
         out["scores"] = scores
         out["road_level_hat_over_truth_at_end"] = _level_ratio(scored, extras)

@@ -60,7 +60,19 @@ rectangular, linear detrend; above ``merge_above_hz`` the periodogram is average
    GLR = U²/(2I); above ``change_nats`` every memory of that tyre is rebuilt from the windows
    since the change's start, so after an abrupt change (or a change of road roughness, which
    the test also sees) the memory is cut, not left to fade.
-6. **Observability.** A corner whose σ exceeds ``observable_sigma_kpa`` (no usable data in
+6. **The suspension and the tyre, linearized at the measured travel.** A corner model with a
+   suspension law (``LinearQuarterCar.suspension``: a progressive spring with stops, a
+   digressive damper) is analysed at its statistically linearized rate
+   (:func:`suvtwin.suspension_law.equivalent_spring_rate`): the travel's and its velocity's
+   standard deviations come from each window's (and each memory's) spectrum of the relative
+   acceleration a_s − a_us above ``travel_min_hz``, the mean travel from the corner's static
+   travel and the damper's jacking; and its tyre's stiffness and damping are scaled by the share
+   of time it touches the road, Φ(W/σ_F), with the dynamic wheel load −(m_s a_s + m_us a_us)
+   taken as Gaussian. Gain tables are made per (corner, rate step ``rate_step``, contact step)
+   when first needed and kept (at most ``table_slots``, least recently used replaced). Where the
+   linearized travel is on a stop or the wheel off the ground more than ``max_nonlinear_share``
+   of the time no linear model holds, and the window is skipped (``rough``).
+7. **Observability.** A corner whose σ exceeds ``observable_sigma_kpa`` (no usable data in
    memory: low speed, flat road, faulty sensor) is flagged not observable; its estimate
    then relaxes to the prior (``prior_pressure_kpa`` ± ``prior_sigma_kpa``) as the memory
    fades, instead of holding an old value with a small σ.
@@ -179,7 +191,10 @@ class MonitorConfig:
         Above this σ a corner is flagged not observable, kPa.
     travel_min_hz : float
         Lowest frequency of the suspension travel's spectrum the equivalent linearization
-        integrates, Hz (below it the double integration of the accelerations amplifies noise).
+        integrates, Hz. Below about 1 Hz the rectangular window's leakage of sub-hertz content
+        (speed control, the body's slow motions), amplified by 1/(2πf)⁴, dominates: from 0.5 Hz
+        the travel's σ came out 10–80 % high on a MuJoCo class D run, from 1 Hz within 8 % of the
+        simulated rate (``tests/test_monitor_linearization.py``).
     rate_step : float
         Relative step of the equivalent suspension rates the gain tables are made for (the
         rate is rounded to the nearest: error ≤ half a step).
@@ -214,10 +229,10 @@ class MonitorConfig:
     max_accel_mps2: float = 1000.0
     spike_z: float = 8.0
     observable_sigma_kpa: float = 25.0
-    travel_min_hz: float = 0.5
+    travel_min_hz: float = 1.0
     rate_step: float = 0.02
     table_slots: int = 32
-    max_nonlinear_share: float = 0.15
+    max_nonlinear_share: float = 0.05
 
     def __post_init__(self) -> None:
         checks = [
@@ -282,7 +297,10 @@ class MonitorUpdate:
     :data:`SKIP_REASONS` of what became of the segment (0: used); `road_level` (K,): the
     shared Gd(n0), m³ (NaN before any data); `waviness` (K,); `speed_mps` (K,): the segment's
     mean speed; `memory_weights` (K, C, M); `restarts` (K, C): memories restarted by the change
-    test at this segment.
+    test at this segment; `spring_rate` (K, C): the suspension rate the segment's window was
+    analysed with, N/m (the equivalent rate of a corner with a suspension law, else its model's;
+    NaN where the window was not analysed); `tyre_contact` (K, C): the share of time the tyre
+    was taken to touch the road (1 without a suspension law; NaN where not analysed).
     """
 
     t_s: np.ndarray
@@ -297,6 +315,8 @@ class MonitorUpdate:
     speed_mps: np.ndarray
     memory_weights: np.ndarray
     restarts: np.ndarray
+    spring_rate: np.ndarray
+    tyre_contact: np.ndarray
 
     @staticmethod
     def concatenate(parts: list[MonitorUpdate]) -> MonitorUpdate:
@@ -664,10 +684,11 @@ class TyreMonitor:
         self._slot_used[slot] = self._n_updates
         return slot
 
-    def _tables_for(self, corners: np.ndarray, spec: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _tables_for(self, corners: np.ndarray, spec: np.ndarray):
         """Gain-table slots for spectra `spec` (..., F, 3) of corners `corners` (same leading shape),
-        and the share of time the linearization's Gaussian travel spends on a stop or the wheel off
-        the ground (0 for corners without a suspension law).
+        the share of time the linearization's Gaussian travel spends on a stop or the wheel off
+        the ground (0 for corners without a suspension law), the suspension rate (N/m) and the
+        tyre's contact share: four arrays of that shape.
 
         A corner whose model has a suspension law gets the tables of its equivalent rate
         (:func:`suvtwin.suspension_law.equivalent_spring_rate`) at the travel's and travel
@@ -680,8 +701,10 @@ class TyreMonitor:
         corners = np.asarray(corners)
         out = corners.copy()
         share = np.zeros(corners.shape)
+        rate = np.array([self.models[c].spring_rate for c in corners.ravel()]).reshape(corners.shape)
+        touch = np.ones(corners.shape)
         if not self._nonlinear:
-            return out, share
+            return out, share, rate, touch
         rel = spec[..., 0].real + spec[..., 1].real - 2.0 * spec[..., 2].real  # S of a_s − a_u
         rel = np.maximum(rel - 2.0 * self.noise, 0.0)
         var_v = rel @ self._travel_weight
@@ -707,7 +730,8 @@ class TyreMonitor:
             stops = ndtr((mean - law.bump_clearance) / np.maximum(sd, 1e-9)) + ndtr(
                 (-mean - law.rebound_clearance) / np.maximum(sd, 1e-9))  # fmt: skip
             share[here] = stops + (1.0 - contact)
-        return out, share
+            rate[here], touch[here] = k_eq, contact
+        return out, share, rate, touch
 
     # ------------------------------------------------------------------ state
     def reset(self) -> None:
@@ -854,7 +878,7 @@ class TyreMonitor:
             stiffness_sigma=z.copy(), observable=np.empty((0, n_c), dtype=bool),
             status=np.empty((0, n_c), dtype=np.int8), road_level=np.empty(0), waviness=np.empty(0),
             speed_mps=np.empty(0), memory_weights=np.empty((0, n_c, n_m)),
-            restarts=np.empty((0, n_c), dtype=int),
+            restarts=np.empty((0, n_c), dtype=int), spring_rate=z.copy(), tyre_contact=z.copy(),
         )  # fmt: skip
 
     # ------------------------------------------------------------------ one segment
@@ -931,6 +955,7 @@ class TyreMonitor:
         elapsed = cfg.update_s if not np.isfinite(s.last_segment_t) else t_end - s.last_segment_t
         s.last_segment_t = t_end
         restarts = np.zeros(n_c, dtype=int)
+        analysed_rate, analysed_touch = np.full(n_c, np.nan), np.full(n_c, np.nan)
         if np.any(used):
             share = self.hop / self.window  # each sample is in window/hop windows
             # weights: a window of fewer samples (while the first fills, or the part after a gap) is
@@ -945,7 +970,8 @@ class TyreMonitor:
                     spec[i] = self._cross_spectra(a_s[-tail[c] :, c : c + 1], a_u[-tail[c] :, c : c + 1])[0]
             b = self._speed_bin(speed)
             table = np.arange(n_c)[:, None]  # each corner's gain tables at this window's travel
-            table[used, 0], rough = self._tables_for(np.flatnonzero(used), spec)
+            table[used, 0], rough, rate_c, touch_c = self._tables_for(np.flatnonzero(used), spec)
+            analysed_rate[used], analysed_touch[used] = rate_c, touch_c
             rough_c = np.zeros(n_c, dtype=bool)
             rough_c[used] = rough > cfg.max_nonlinear_share
             if np.any(rough_c):  # no linear model holds: the window is not used for k_t
@@ -993,7 +1019,7 @@ class TyreMonitor:
             self._forget(elapsed)  # time passes: memories fade
         s.fits = self._fit_all(s.fits)
         self._n_updates += 1
-        return self._output(t_end, speed, status, restarts)
+        return self._output(t_end, speed, status, restarts, analysed_rate, analysed_touch)
 
     def _speed_bin(self, speed: float) -> int:
         """Index of the accumulators' speed bin nearest `speed` (m/s), geometric bins."""
@@ -1205,7 +1231,7 @@ class TyreMonitor:
         mean_spec = s.spec[:, :, bins] / np.maximum(stored, 1e-300)[..., None, None]
         mean_spec = mean_spec.reshape(rows, bins.size, self.freq.size, 3)
         row_corner = np.tile(np.arange(n_c), n_m)
-        table, _ = self._tables_for(np.repeat(row_corner[:, None], bins.size, axis=1), mean_spec)
+        table = self._tables_for(np.repeat(row_corner[:, None], bins.size, axis=1), mean_spec)[0]
         proj = self._project(mean_spec, table)  # (rows, D, B, F)
         weight = Wb.reshape(rows, bins.size)[:, :, None] * band[None]  # (rows, B, F)
         total = W.sum(axis=2).reshape(rows)
@@ -1309,7 +1335,7 @@ class TyreMonitor:
         return lam, p0
 
     # ------------------------------------------------------------------ output
-    def _output(self, t_end: float, speed: float, status: np.ndarray, restarts: np.ndarray) -> MonitorUpdate:
+    def _output(self, t_end, speed, status, restarts, spring_rate, tyre_contact) -> MonitorUpdate:
         cfg = self.config
         s = self._state
         score = s.score - s.score.max(axis=1, keepdims=True)
@@ -1345,6 +1371,8 @@ class TyreMonitor:
             speed_mps=np.array([speed]),
             memory_weights=pi[None],
             restarts=restarts[None],
+            spring_rate=spring_rate[None],
+            tyre_contact=tyre_contact[None],
         )
 
 

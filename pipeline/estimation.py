@@ -118,6 +118,7 @@ def estimate_run(
         seeds=np.array([seed]),
         tire_file=tire_file,
         speed_series_mps=frame["speed_mps"].to_numpy(dtype=float)[None, :],
+        static_travel_m=corner_static_travel(corner, run_loads(meta)),
     )
     batch = entry.run(signals)
     metadata = {

@@ -66,7 +66,9 @@ class CornerSignals:
     estimate per run, kPa, or None for the estimator's default; `tire_file`: the tyre the runs
     were made with (a ``.tir`` file; its k_t(p), eq. 3–4, and damping), None for the SUV's;
     `speed_series_mps`: the speed at every sample, m/s, shape (B, T), for estimators that use the
-    speed as it is at each time (causal ones), None where only the mean is known.
+    speed as it is at each time (causal ones), None where only the mean is known;
+    `static_travel_m`: the corner's static suspension compression under the runs' extra load, m
+    (for estimators that linearize the suspension at the travel they measure).
     """
 
     acc_sprung: np.ndarray
@@ -81,6 +83,7 @@ class CornerSignals:
     initial_pressure_kpa: np.ndarray | None = None
     tire_file: str | Path | None = None
     speed_series_mps: np.ndarray | None = None
+    static_travel_m: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -212,7 +215,8 @@ def _run_online(signals: CornerSignals) -> BatchEstimate:
         tire_stiffness_of,
     )
 
-    qc = linear_corner_model(signals.corner, signals.sprung_mass, tire_file=signals.tire_file)
+    qc = linear_corner_model(signals.corner, signals.sprung_mass, tire_file=signals.tire_file,
+                             static_travel=signals.static_travel_m)  # fmt: skip
     tire = tire_stiffness_of(signals.tire_file)
     n_runs, n_steps = signals.acc_sprung.shape
     t = np.arange(n_steps) * signals.dt

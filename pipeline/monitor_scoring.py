@@ -336,17 +336,30 @@ def warning_detection(
     return out
 
 
-def false_warnings(traces: Sequence[MonitorTrace]) -> dict:
+def false_warnings(traces: Sequence[MonitorTrace], names: Sequence[str] | None = None) -> dict:
     """Warnings on runs at nominal pressure (each is false): number of warning onsets (rising
-    edges per tyre), the runs with any, the simulated minutes and onsets per simulated minute."""
+    edges per tyre), the runs with any, the simulated minutes and onsets per simulated minute, and
+    each onset's evidence (``events``: run index or `names[i]`, tyre, time, estimate, σ, truth)."""
     onsets = np.array([int(_rising_edges(tr.warning).sum()) for tr in traces])
     minutes = float(sum(tr.duration_s for tr in traces) / 60.0)
+    events = []
+    for i, tr in enumerate(traces):
+        w = np.asarray(tr.warning, bool)
+        rise = w & ~np.vstack([np.zeros((1, w.shape[1]), bool), w[:-1]])
+        for k, c in zip(*np.nonzero(rise), strict=True):
+            truth = tr.truth_kpa[min(int(np.searchsorted(tr.t_s, tr.t_est[k])), len(tr.t_s) - 1), c]
+            events.append({
+                "run": names[i] if names is not None else i, "tyre": CORNERS[c], "t_s": float(tr.t_est[k]),
+                "estimate_kpa": float(tr.p_hat[k, c]), "sigma_kpa": float(tr.sigma[k, c]),
+                "truth_kpa": float(truth),
+            })  # fmt: skip
     return {
         "false_warnings": int(onsets.sum()),
         "runs_with_false_warning": int(np.sum(onsets > 0)),
         "runs": len(traces),
         "simulated_min": minutes,
         "per_simulated_min": float(onsets.sum() / minutes) if minutes > 0 else None,
+        "events": events,
     }
 
 
@@ -389,8 +402,10 @@ def score_set(
         out["warning"] = warning_detection(traces, [i["deflated"] for i in infos], window_s=60.0)
     elif set_name == "nominal_long":
         weave = np.array([bool(i.get("weave")) for i in infos])
-        out["false_warnings"] = false_warnings(traces)
-        out["false_warnings_lane"] = false_warnings([t for t, w in zip(traces, weave, strict=True) if not w])
+        names = [str(i.get("name", k)) for k, i in enumerate(infos)]
+        out["false_warnings"] = false_warnings(traces, names)
+        lane = [k for k, w in enumerate(weave) if not w]
+        out["false_warnings_lane"] = false_warnings([traces[k] for k in lane], [names[k] for k in lane])
         out["false_warnings_weave"] = false_warnings([t for t, w in zip(traces, weave, strict=True) if w])
     return out
 

@@ -112,7 +112,9 @@ def monitor_run(
     one row per update: ``t_s``, ``speed_mps``, per corner ``{c}_pressure_hat_kpa``,
     ``{c}_pressure_sigma_kpa``, ``{c}_observable``, ``{c}_status`` (what became of the segment:
     ``used`` or why skipped), ``{c}_reference_kpa``, ``{c}_loss_probability``, ``{c}_warning``
-    (latched), and the shared ``road_level_hat_m3`` and ``waviness_hat``.
+    (latched), ``{c}_spring_rate_npm`` and ``{c}_tyre_contact`` (the suspension rate and tyre contact
+    share the window was analysed with: :class:`~suvtwin.estimators.monitor.MonitorUpdate`), and the
+    shared ``road_level_hat_m3`` and ``waviness_hat``.
     """
     unknown = [c for c in corners if c not in CORNERS]
     if unknown or not corners:
@@ -154,6 +156,8 @@ def monitor_run(
         columns[f"{c}_reference_kpa"] = warn.reference_kpa[:, i]
         columns[f"{c}_loss_probability"] = warn.probability[:, i]
         columns[f"{c}_warning"] = warn.warning[:, i]
+        columns[f"{c}_spring_rate_npm"] = update.spring_rate[:, i]
+        columns[f"{c}_tyre_contact"] = update.tyre_contact[:, i]
     columns["road_level_hat_m3"] = update.road_level
     columns["waviness_hat"] = update.waviness
     counts = monitor.counts
