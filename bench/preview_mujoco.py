@@ -63,7 +63,7 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=100)
     ap.add_argument("--times", default="10,30", help="evaluation times, s")
     ap.add_argument("--no-monitor", action="store_true", help="only the preview at the true front")
-    ap.add_argument("--sigma-scale", type=float, default=1.0)
+    ap.add_argument("--sigma-scale", type=float, default=PreviewConfig.sigma_scale)
     a = ap.parse_args()
     times = [float(x) for x in a.times.split(",")]
     paths = sorted(Path(a.runs_dir).glob("*.parquet"))[: a.runs]

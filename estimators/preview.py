@@ -128,8 +128,10 @@ class PreviewConfig:
     min_segments : float
         Fewest effective segments, (Σw)²/Σw², for the preview to count as informative.
     sigma_scale : float
-        Factor on the likelihood's own σ (leakage makes the residuals of neighbouring frequencies
-        correlated, which the likelihood does not know).
+        Factor on the likelihood's own σ: leakage makes the residuals of neighbouring frequencies
+        correlated, which the likelihood does not know. On linear truth (two corner models on an
+        ISO road profile, 50–120 km/h, 0.5 m/s² noise, 10 seeds each) the rear's error std at the
+        true front was 1.3–2.3 times the likelihood's σ at 10 s and 30 s, hence 2.
     """
 
     segment_s: float = 1.0
@@ -147,7 +149,7 @@ class PreviewConfig:
     slope_step_kpa: float = 5.0
     damping_fraction: float = 1.0
     min_segments: float = 3.0
-    sigma_scale: float = 1.0
+    sigma_scale: float = 2.0
 
     def __post_init__(self) -> None:
         checks = [
@@ -246,6 +248,17 @@ def _fixed_damping(qc: LinearQuarterCar, fraction: float) -> LinearQuarterCar:
         return qc
     lo, hi = sorted(qc.damping_range)
     return replace(qc, damping=float(lo + fraction * (hi - lo)), damping_range=None)
+
+
+def _per_memory(value, memories: int) -> np.ndarray | None:
+    """`value` as one float per memory (a number is repeated); None if it is neither."""
+    try:
+        a = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        return None
+    if a.ndim == 0:
+        return np.full(memories, float(a))
+    return a if a.shape == (memories,) else None
 
 
 def _detrend_rows(x: np.ndarray) -> np.ndarray:
@@ -450,8 +463,8 @@ class PreviewTrack:
     def decay(self, factor: float | npt.ArrayLike) -> None:
         """Multiply the statistics by `factor` (scalar or one per memory, in (0, 1]): forgetting,
         e.g. ``exp(-elapsed_s / tau_s)``."""
-        f = np.broadcast_to(np.asarray(factor, dtype=float), (self._memories,))
-        if not np.all(np.isfinite(f) & (f > 0) & (f <= 1)):
+        f = _per_memory(factor, self._memories)
+        if f is None or not np.all(np.isfinite(f) & (f > 0) & (f <= 1)):
             raise InputError(f"decay factor must lie in (0, 1], got {factor!r}")
         self.A *= f[:, None]
         self.B *= f[:, None]
@@ -490,12 +503,8 @@ class PreviewTrack:
         xr = self._vector("acc_u_rear", acc_u_rear, xf.size)
         v = np.asarray(speed_mps, dtype=float)
         v = np.full(xf.size, float(v)) if v.ndim == 0 else self._vector("speed_mps", v, xf.size)
-        w = (
-            np.broadcast_to(np.asarray(weight, dtype=float), (self._memories,))
-            if np.ndim(weight) <= 1
-            else None
-        )
-        if w is None or w.shape != (self._memories,) or not np.all(np.isfinite(w) & (w >= 0)):
+        w = _per_memory(weight, self._memories)
+        if w is None or not np.all(np.isfinite(w) & (w >= 0)):
             raise InputError(f"weight must be ≥ 0, a number or {self._memories} of them, got {weight!r}")
         if (acc_s_front is None) != (acc_s_rear is None):
             raise InputError("acc_s_front and acc_s_rear must be given together (or neither)")
@@ -558,24 +567,23 @@ class PreviewTrack:
 
     def _accumulate(self, fronts, rears, deltas, loads, w) -> None:
         """Add S segment pairs (S, n) with fractional delays (S,) s; `loads` (S, 4, n): unsprung front,
-        unsprung rear, sprung front, sprung rear."""
-        x = np.fft.rfft(_detrend_rows(fronts), axis=1)[:, self._index]
-        y = np.fft.rfft(_detrend_rows(rears), axis=1)[:, self._index]
-        phase = np.exp(2j * np.pi * deltas[:, None] * self.f[None, :])
-        s = len(deltas)
-        self.A += w[:, None] * np.sum(np.abs(x) ** 2, axis=0)[None, :]
-        self.B += w[:, None] * np.sum(np.abs(y) ** 2, axis=0)[None, :]
-        self.C += w[:, None] * np.sum(np.conj(x) * y * phase, axis=0)[None, :]
-        self.K += w * s
-        self.K2 += w * w * s
-        # the tyre's dynamic load per corner, (m_s a_s + m_us a_us) (N)
+        unsprung rear, sprung front, sprung rear. One segment at a time, so the sums are the same,
+        bit for bit, however the samples were chunked."""
         fm, rm = self.front_model, self.rear_model
-        load_f = fm.sprung_mass * loads[:, 2] + fm.unsprung_mass * loads[:, 0]
-        load_r = rm.sprung_mass * loads[:, 3] + rm.unsprung_mass * loads[:, 1]
-        for c, ld in enumerate((load_f, load_r)):
-            self._load[:, c, 0] += w * ld.size
-            self._load[:, c, 1] += w * ld.sum()
-            self._load[:, c, 2] += w * np.sum(ld * ld)
+        for x_t, y_t, delta, ld in zip(fronts, rears, deltas, loads, strict=True):
+            x = np.fft.rfft(_detrend_rows(x_t[None, :])[0])[self._index]
+            y = np.fft.rfft(_detrend_rows(y_t[None, :])[0])[self._index]
+            self.A += w[:, None] * (np.abs(x) ** 2)[None, :]
+            self.B += w[:, None] * (np.abs(y) ** 2)[None, :]
+            self.C += w[:, None] * (np.conj(x) * y * np.exp(2j * np.pi * delta * self.f))[None, :]
+            self.K += w
+            self.K2 += w * w
+            # each tyre's dynamic load, m_s a_s + m_us a_us (N)
+            for c, load in enumerate((fm.sprung_mass * ld[2] + fm.unsprung_mass * ld[0],
+                                      rm.sprung_mass * ld[3] + rm.unsprung_mass * ld[1])):  # fmt: skip
+                self._load[:, c, 0] += w * load.size
+                self._load[:, c, 1] += w * load.sum()
+                self._load[:, c, 2] += w * (load @ load)
 
     # ------------------------------------------------------------------------------ likelihood
     def _response(self, qc: LinearQuarterCar, tire: TireStiffness, p_kpa: np.ndarray) -> np.ndarray:
