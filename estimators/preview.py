@@ -261,13 +261,6 @@ def _per_memory(value, memories: int) -> np.ndarray | None:
     return a if a.shape == (memories,) else None
 
 
-def _detrend_rows(x: np.ndarray) -> np.ndarray:
-    """Each row less its least-squares line."""
-    n = x.shape[-1]
-    t = np.arange(n) - 0.5 * (n - 1)
-    return x - x.mean(axis=-1, keepdims=True) - np.outer((x @ t) / (t @ t), t)
-
-
 @cached_njit
 def _loglik_point(table, i, bg, cr, ci, ar, group, keep, kg, work):
     """ℓ at row i of a rear table (3, P, F) (Re h_r, Im h_r, |h_r|²), given the per-band sums of B
@@ -409,6 +402,8 @@ class PreviewTrack:
         self._indicator = (group[:, None] == np.arange(self._group_size.size)[None, :]).astype(
             float
         )  # (F, G)
+        self._ramp = np.arange(n) - 0.5 * (n - 1)  # for the linear detrend
+        self._ramp_norm = float(self._ramp @ self._ramp)
         self._noise_dft = n * cfg.sigma_accel**2  # E|DFT of white noise|², (m/s²)²
         self._history = n + int(math.ceil(self.wheelbase_m / (cfg.min_speed_mps * self.dt))) + 1
         # the search grid: a fine one (a quarter of grid_step_kpa), every 4th point the coarse one
@@ -571,8 +566,8 @@ class PreviewTrack:
         bit for bit, however the samples were chunked."""
         fm, rm = self.front_model, self.rear_model
         for x_t, y_t, delta, ld in zip(fronts, rears, deltas, loads, strict=True):
-            x = np.fft.rfft(_detrend_rows(x_t[None, :])[0])[self._index]
-            y = np.fft.rfft(_detrend_rows(y_t[None, :])[0])[self._index]
+            x = np.fft.rfft(self._detrend(x_t))[self._index]
+            y = np.fft.rfft(self._detrend(y_t))[self._index]
             self.A += w[:, None] * (np.abs(x) ** 2)[None, :]
             self.B += w[:, None] * (np.abs(y) ** 2)[None, :]
             self.C += w[:, None] * (np.conj(x) * y * np.exp(2j * np.pi * delta * self.f))[None, :]
@@ -584,6 +579,10 @@ class PreviewTrack:
                 self._load[:, c, 0] += w * load.size
                 self._load[:, c, 1] += w * load.sum()
                 self._load[:, c, 2] += w * (load @ load)
+
+    def _detrend(self, x: np.ndarray) -> np.ndarray:
+        """`x` (n,) less its least-squares line."""
+        return x - x.mean() - self._ramp * ((self._ramp @ x) / self._ramp_norm)
 
     # ------------------------------------------------------------------------------ likelihood
     def _response(self, qc: LinearQuarterCar, tire: TireStiffness, p_kpa: np.ndarray) -> np.ndarray:
