@@ -4,8 +4,9 @@ Run: ``python bench/preview_mujoco.py [--runs-dir bench/_runs/constant] [--runs 
 — prints JSON. One process; the run files are only read.
 
 Per run and track (fl→rl, fr→rr) a :class:`~suvtwin.estimators.preview.PreviewTrack` (the run's
-corner models and tyre, no forgetting) is fed the measured unsprung and sprung accelerations and the
-speed in 1 s chunks; at each time T of ``--times`` it gives the rear pressure (i) given the TRUE front
+corner models and tyre) is fed the measured unsprung and sprung accelerations and the
+speed in 1 s chunks (``--memory-s``: the statistics forgotten with that time constant before each);
+at each time T of ``--times`` it gives the rear pressure (i) given the TRUE front
 pressure (σ_f = 0), (ii) given the monitor's front estimate and σ at its last update at or before T
 (:func:`suvtwin.pipeline.monitoring.monitor_run`, columns ``{c}_pressure_hat_kpa``,
 ``{c}_pressure_sigma_kpa``), beside (iii) the monitor's own rear estimate. Errors (estimate − truth,
@@ -63,6 +64,9 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=100)
     ap.add_argument("--times", default="10,30", help="evaluation times, s")
     ap.add_argument("--no-monitor", action="store_true", help="only the preview at the true front")
+    ap.add_argument(
+        "--memory-s", type=float, default=None, help="forgetting time constant τ, s (default none)"
+    )
     ap.add_argument("--sigma-scale", type=float, default=PreviewConfig.sigma_scale)
     a = ap.parse_args()
     times = [float(x) for x in a.times.split(",")]
@@ -91,6 +95,8 @@ def main() -> None:
                 while fed < end:
                     sl = slice(fed, min(fed + step, end))
                     c0 = time.perf_counter()
+                    if a.memory_s is not None:
+                        track.decay(np.exp(-(sl.stop - sl.start) * dt / a.memory_s))
                     track.add(
                         col[f"{front}_accel_unsprung_mps2"][sl], col[f"{rear}_accel_unsprung_mps2"][sl],
                         col["speed_mps"][sl], acc_s_front=col[f"{front}_accel_sprung_mps2"][sl],
@@ -145,6 +151,7 @@ def main() -> None:
         "runs": len(paths),
         "tracks": 2 * len(paths),
         "config": {k: getattr(config, k) for k in config.__dataclass_fields__},
+        "memory_s": a.memory_s,
         "rows": {
             f"{key}@{T:g}s": {name: table(key, T, c) for name, c in splits.items()}
             for key in keys

@@ -118,6 +118,10 @@ def test_rear_given_true_front_on_linear_truth(linear_run):
     grid = np.arange(out.mean_kpa - 3.0, out.mean_kpa + 3.01, 0.25)
     ll = track.loglik(205.0, grid)
     assert abs(grid[np.argmax(ll)] - out.mean_kpa) <= 0.25
+    # ... and its curvature is the likelihood's σ (no forgetting: the sandwich factor is 1)
+    lm, l0, lp = track.loglik(205.0, out.mean_kpa + np.array([-1.0, 0.0, 1.0]))
+    h_rr = track.config.sigma_scale**2 / out.sigma_likelihood_kpa**2
+    assert -(lp - 2 * l0 + lm) == pytest.approx(h_rr, rel=0.1)
 
 
 def test_little_data_is_not_informative(linear_run):
