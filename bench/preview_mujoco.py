@@ -9,11 +9,12 @@ speed in 1 s chunks (``--memory-s``: the statistics forgotten with that time con
 at each time T of ``--times`` it gives the rear pressure (i) given the TRUE front
 pressure (σ_f = 0), (ii) given the monitor's front estimate and σ at its last update at or before T
 (:func:`suvtwin.pipeline.monitoring.monitor_run`, columns ``{c}_pressure_hat_kpa``,
-``{c}_pressure_sigma_kpa``), beside (iii) the monitor's own rear estimate. Errors (estimate − truth,
-kPa): mean ± std and the share within ±2σ, over all tracks and split by the track's dynamic load
-coefficient (≤ / > ``rough_dlc``, the preview's own, accumulated up to T); the preview's rows only
-where it says it is informative (counted). Cost: wall time of ``add`` per 1 s chunk and of
-``conditional`` per call (one track, one core).
+``{c}_pressure_sigma_kpa``), beside (iii) the monitor's own rear estimate, and (iv) both pressures
+fused (:func:`~suvtwin.estimators.preview.fuse_track`: the monitor's front and rear and the preview).
+Errors (estimate − truth, kPa): mean ± std and the share within ±2σ, over all tracks and split by
+the track's dynamic load coefficient (≤ / > ``rough_dlc``, the preview's own, accumulated up to T);
+the preview's rows only where it says it is informative (counted). Cost: wall time of ``add`` per
+1 s chunk and of ``conditional`` per call (one track, one core).
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from pathlib import Path
 import numpy as np
 import pyarrow.parquet as pq
 
-from suvtwin.estimators.preview import PreviewConfig, PreviewTrack
+from suvtwin.estimators.preview import PreviewConfig, PreviewTrack, fuse_track
 from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
 from suvtwin.pipeline.estimation import run_load_and_tire, run_loads
 from suvtwin.pipeline.monitoring import corner_models, monitor_run
@@ -129,13 +130,18 @@ def main() -> None:
                         row["monitor_rear"] = {"mean": float(r[f"{rear}_pressure_hat_kpa"]),
                                                "sigma": float(r[f"{rear}_pressure_sigma_kpa"])}  # fmt: skip
                         row["monitor_front_own"] = {"mean": pf, "sigma": sf}
+                        pr, sr = row["monitor_rear"]["mean"], row["monitor_rear"]["sigma"]
+                        if given.informative and sr > 0:
+                            m, cv = fuse_track(min(max(pf, lo), hi), sf, pr, sr, given)
+                            row["fused_front"] = {"mean": float(m[0]), "sigma": float(np.sqrt(cv[0, 0]))}
+                            row["fused_rear"] = {"mean": float(m[1]), "sigma": float(np.sqrt(cv[1, 1]))}
                 rows.append(row)
     wall = time.perf_counter() - t0
 
     def table(key: str, T: float, cond=lambda r: True) -> dict:
         sel = [r for r in rows if r["t_s"] == T and key in r and cond(r)]
         used = [r for r in sel if r[key].get("informative", True) and np.isfinite(r[key]["mean"])]
-        truth = "p_front_kpa" if key == "monitor_front_own" else "p_rear_kpa"
+        truth = "p_front_kpa" if key in ("monitor_front_own", "fused_front") else "p_rear_kpa"
         out = summary([r[key]["mean"] - r[truth] for r in used], [r[key]["sigma"] for r in used])
         out["not_informative"] = len(sel) - len(used)
         return out
@@ -146,7 +152,9 @@ def main() -> None:
         "dlc_le": lambda r: np.isfinite(r["dlc"]) and r["dlc"] <= rough,
         "dlc_gt": lambda r: not (np.isfinite(r["dlc"]) and r["dlc"] <= rough),
     }
-    keys = ["true_front"] + ([] if a.no_monitor else ["monitor_front", "monitor_rear", "monitor_front_own"])
+    keys = ["true_front"]
+    if not a.no_monitor:
+        keys += ["monitor_front", "monitor_rear", "monitor_front_own", "fused_rear", "fused_front"]
     result = {
         "runs": len(paths),
         "tracks": 2 * len(paths),
@@ -170,7 +178,8 @@ def main() -> None:
         },  # fmt: skip
         "wall_s": round(wall, 1),
         "notes": "errors estimate − truth, kPa; 'dlc_le'/'dlc_gt': the track's DLC up to T ≤ / > rough_dlc; "
-        "monitor_front_own: the monitor's front estimate itself; preview rows only where informative",
+        "monitor_front_own: the monitor's front estimate itself; fused_front/fused_rear: fuse_track of the "
+        "monitor's two and the preview; preview rows only where informative",
     }
     print(json.dumps(result, indent=1))
 

@@ -80,7 +80,14 @@ from suvtwin.estimators.joint import LinearQuarterCar, corner_response
 from suvtwin.jit import cached_njit
 from suvtwin.tire_stiffness import TireStiffness, stiffness_at_pressure_array
 
-__all__ = ["SKIP_REASONS", "PreviewConditional", "PreviewConfig", "PreviewTrack", "own_track_response"]
+__all__ = [
+    "SKIP_REASONS",
+    "PreviewConditional",
+    "PreviewConfig",
+    "PreviewTrack",
+    "fuse_track",
+    "own_track_response",
+]
 
 SKIP_REASONS = ("used", "gap", "speed", "warmup")
 """What became of a completed rear segment (counts in :attr:`PreviewTrack.counts`): ``used``;
@@ -241,6 +248,47 @@ def own_track_response(f: npt.ArrayLike, kt: npt.ArrayLike, qc: LinearQuarterCar
     if qc.roll_mass is None:
         return h
     return 0.5 * (h + corner_response(f, kt, qc, roll=True)[1])
+
+
+def fuse_track(
+    p_front_kpa: float,
+    sigma_front_kpa: float,
+    p_rear_kpa: float,
+    sigma_rear_kpa: float,
+    preview: PreviewConditional,
+) -> tuple[np.ndarray, np.ndarray]:
+    r"""Both pressures of a track from their own (independent) Gaussians and the preview.
+
+    The preview, linearized along its ridge, is one linear-Gaussian measurement of the two pressures,
+
+    .. math:: y = p_r - s\,p_f,\qquad y_\mathrm{obs} = p_r^*(\hat p_f) - s\,\hat p_f,\qquad
+       R = \sigma_\mathrm{lik}^2 + \sigma_\mathrm{floor}^2,
+
+    s the ridge slope, taken at the front's mean `p_front_kpa` (``preview`` must be
+    :meth:`PreviewTrack.conditional` at that mean); the prior is N((p̂_f, p̂_r), diag(σ_f², σ_r²)) (kPa)
+    and the update is Kalman's. The rear's mean is then the inverse-variance mean of its own estimate
+    and the preview's (``preview.mean_kpa``, ``preview.sigma_kpa``); the front moves too, by
+    −s σ_f²/S times the same innovation. Returns the mean (2,) (front, rear) and covariance (2, 2),
+    kPa and kPa²; the prior unchanged if the preview is not informative.
+    """
+    mean = np.array([p_front_kpa, p_rear_kpa], dtype=float)
+    cov = np.diag([sigma_front_kpa**2, sigma_rear_kpa**2]).astype(float)
+    if not (
+        np.all(np.isfinite(mean)) and np.all(np.isfinite(cov)) and sigma_front_kpa >= 0 and sigma_rear_kpa > 0
+    ):
+        raise InputError(
+            "fuse_track needs finite pressures and σ (sigma_front_kpa ≥ 0, sigma_rear_kpa > 0 kPa), got "
+            f"{p_front_kpa!r} ± {sigma_front_kpa!r}, {p_rear_kpa!r} ± {sigma_rear_kpa!r}"
+        )
+    if not preview.informative:
+        return mean, cov
+    s = preview.ridge_slope
+    h = np.array([-s, 1.0])
+    r = preview.sigma_likelihood_kpa**2 + preview.floor_kpa**2
+    innovation = preview.mean_kpa - p_rear_kpa  # y_obs − h·mean
+    big_s = float(h @ cov @ h) + r
+    gain = cov @ h / big_s
+    return mean + gain * innovation, cov - np.outer(gain, gain) * big_s
 
 
 def _fixed_damping(qc: LinearQuarterCar, fraction: float) -> LinearQuarterCar:

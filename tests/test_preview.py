@@ -17,7 +17,7 @@ import pytest
 import scipy.signal
 
 from suvtwin.errors import InputError
-from suvtwin.estimators.preview import PreviewConfig, PreviewTrack
+from suvtwin.estimators.preview import PreviewConditional, PreviewConfig, PreviewTrack, fuse_track
 from suvtwin.pipeline.estimation import corner_sprung_mass, linear_corner_model
 from suvtwin.roads.profile import generate_road
 from suvtwin.roads.spec import RoadSpec, SegmentSpec
@@ -225,6 +225,37 @@ def test_forgetting_and_memories_weight_the_segments():
     assert two.K.tolist() == pytest.approx([0.25 * first[2] + later[2], 0.5 * first[2] + later[2]])
     assert two.K2[0] == pytest.approx(0.25**2 * first[2] + later[2])
     assert two.state_nbytes < 40_000
+
+
+def test_fusion_is_the_posterior_of_the_linearized_ridge():
+    """fuse_track against the posterior moments of the product of the two Gaussians and the ridge's
+    Gaussian likelihood exp(−(p_r − p_r*(p̂_f) − s (p_f − p̂_f))²/2R), summed on a grid."""
+    cond = PreviewConditional(
+        mean_kpa=171.0, sigma_kpa=float("nan"), informative=True, reason="", sigma_likelihood_kpa=1.5,
+        ridge_slope=0.9, cov_front_rear_kpa2=float("nan"), floor_kpa=4.0, dlc=0.1, segments=30.0,
+        bands_used=5,
+    )  # fmt: skip
+    mean, cov = fuse_track(200.0, 10.0, 185.0, 12.0, cond)
+    pf, pr = np.meshgrid(np.arange(120.0, 280.0, 0.25), np.arange(100.0, 260.0, 0.25), indexing="ij")
+    r = 1.5**2 + 4.0**2
+    log_w = (
+        -((pf - 200.0) ** 2) / 200.0
+        - (pr - 185.0) ** 2 / 288.0
+        - (pr - 171.0 - 0.9 * (pf - 200.0)) ** 2 / (2 * r)
+    )
+    w = np.exp(log_w - log_w.max())
+    w /= w.sum()
+    m = np.array([np.sum(w * pf), np.sum(w * pr)])
+    d = np.stack([pf - m[0], pr - m[1]])
+    c = np.einsum("iab,jab,ab->ij", d, d, w)
+    np.testing.assert_allclose(mean, m, atol=1e-6)
+    np.testing.assert_allclose(cov, c, atol=1e-4)
+    # not informative: the prior back
+    flat = dataclasses.replace(cond, informative=False, reason="few_segments")
+    mean, cov = fuse_track(200.0, 10.0, 185.0, 12.0, flat)
+    assert mean.tolist() == [200.0, 185.0] and cov.tolist() == [[100.0, 0.0], [0.0, 144.0]]
+    with pytest.raises(InputError, match="sigma_rear_kpa"):
+        fuse_track(200.0, 10.0, 185.0, 0.0, cond)
 
 
 @pytest.mark.parametrize(
