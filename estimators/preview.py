@@ -325,11 +325,12 @@ def _loglik_point(table, i, bg, cr, ci, ar, group, keep, kg, work):
 
 
 @cached_njit
-def _ridge_kernel(b, c_re, c_im, a, group, keep, kg, coarse, fine, p_fine, step):
+def _ridge_kernel(b, c_re, c_im, a, group, keep, kg, coarse, fine, p_fine, step, window):
     """For each front response r (rows of `c_re`, `c_im`, `a`, (R, F)): the coarse grid's best rear
     pressure, refined by the least-squares parabola through ℓ at the 9 fine points within ±`step`
-    (kPa) of it. Returns p_r* (R,) kPa, H_rr = −ℓ'' (R,) per kPa² (NaN: not concave) and whether
-    the coarse maximum is inside the grid (R,)."""
+    (kPa) of it. Row 0 searches the whole grid, the others `window` coarse points either side of
+    row 0's best (neighbouring front pressures). Returns p_r* (R,) kPa, H_rr = −ℓ'' (R,) per kPa²
+    (NaN: not concave) and whether the coarse maximum is inside the grid and the window (R,)."""
     n_r = c_re.shape[0]
     n_g = kg.size
     work = np.zeros(n_g)
@@ -340,14 +341,20 @@ def _ridge_kernel(b, c_re, c_im, a, group, keep, kg, coarse, fine, p_fine, step)
     h_out = np.full(n_r, np.nan)
     inside = np.zeros(n_r, dtype=np.bool_)
     h = 0.25 * step
+    n_p = coarse.shape[1]
+    lo, hi, ib0 = 0, n_p - 1, 0
     for r in range(n_r):
-        best, ib = -np.inf, 0
-        for i in range(coarse.shape[1]):
+        if r > 0:
+            lo, hi = max(ib0 - window, 0), min(ib0 + window, n_p - 1)
+        best, ib = -np.inf, lo
+        for i in range(lo, hi + 1):
             ll = _loglik_point(coarse, i, bg, c_re[r], c_im[r], a[r], group, keep, kg, work)
             if ll > best:
                 best, ib = ll, i
+        if r == 0:
+            ib0 = ib
         p_out[r] = p_fine[4 * ib]
-        if ib == 0 or ib == coarse.shape[1] - 1:
+        if ib == 0 or ib == n_p - 1 or (r > 0 and (ib == lo or ib == hi)):
             continue
         inside[r] = True
         # parabola ℓ ≈ c0 + c1 x + c2 x² on x = (k − 4) h, k = 0..8: x and x² − mean(x²) are orthogonal
@@ -610,27 +617,32 @@ class PreviewTrack:
 
     def _accumulate(self, fronts, rears, deltas, loads, w) -> None:
         """Add S segment pairs (S, n) with fractional delays (S,) s; `loads` (S, 4, n): unsprung front,
-        unsprung rear, sprung front, sprung rear. One segment at a time, so the sums are the same,
-        bit for bit, however the samples were chunked."""
+        unsprung rear, sprung front, sprung rear. Every row is transformed on its own and the sums
+        are taken one segment at a time, so they are the same, bit for bit, however the samples
+        were chunked."""
         fm, rm = self.front_model, self.rear_model
-        for x_t, y_t, delta, ld in zip(fronts, rears, deltas, loads, strict=True):
-            x = np.fft.rfft(self._detrend(x_t))[self._index]
-            y = np.fft.rfft(self._detrend(y_t))[self._index]
-            self.A += w[:, None] * (np.abs(x) ** 2)[None, :]
-            self.B += w[:, None] * (np.abs(y) ** 2)[None, :]
-            self.C += w[:, None] * (np.conj(x) * y * np.exp(2j * np.pi * delta * self.f))[None, :]
+        x = np.fft.rfft(self._detrend(fronts), axis=1)[:, self._index]
+        y = np.fft.rfft(self._detrend(rears), axis=1)[:, self._index]
+        axx = np.abs(x) ** 2
+        ayy = np.abs(y) ** 2
+        cxy = np.conj(x) * y * np.exp(2j * np.pi * deltas[:, None] * self.f[None, :])
+        # each tyre's dynamic load, m_s a_s + m_us a_us (N): its sum and sum of squares per segment
+        load = np.stack([fm.sprung_mass * loads[:, 2] + fm.unsprung_mass * loads[:, 0],
+                         rm.sprung_mass * loads[:, 3] + rm.unsprung_mass * loads[:, 1]], axis=1)  # fmt: skip
+        moments = np.stack([np.full(load.shape[:2], float(load.shape[2])), load.sum(axis=2),
+                            (load * load).sum(axis=2)], axis=2)  # (S, 2, 3)  # fmt: skip
+        for k in range(len(deltas)):
+            self.A += w[:, None] * axx[k][None, :]
+            self.B += w[:, None] * ayy[k][None, :]
+            self.C += w[:, None] * cxy[k][None, :]
             self.K += w
             self.K2 += w * w
-            # each tyre's dynamic load, m_s a_s + m_us a_us (N)
-            for c, load in enumerate((fm.sprung_mass * ld[2] + fm.unsprung_mass * ld[0],
-                                      rm.sprung_mass * ld[3] + rm.unsprung_mass * ld[1])):  # fmt: skip
-                self._load[:, c, 0] += w * load.size
-                self._load[:, c, 1] += w * load.sum()
-                self._load[:, c, 2] += w * (load @ load)
+            self._load += w[:, None, None] * moments[k][None, :, :]
 
     def _detrend(self, x: np.ndarray) -> np.ndarray:
-        """`x` (n,) less its least-squares line."""
-        return x - x.mean() - self._ramp * ((self._ramp @ x) / self._ramp_norm)
+        """Each row of `x` (S, n) less its least-squares line (row by row: the same whatever S)."""
+        slope = (x * self._ramp).sum(axis=1, keepdims=True) / self._ramp_norm
+        return x - x.mean(axis=1, keepdims=True) - self._ramp * slope
 
     # ------------------------------------------------------------------------------ likelihood
     def _response(self, qc: LinearQuarterCar, tire: TireStiffness, p_kpa: np.ndarray) -> np.ndarray:
@@ -750,7 +762,7 @@ class PreviewTrack:
         ps, hs, inside = _ridge_kernel(
             self.B[mem], np.ascontiguousarray(c.real), np.ascontiguousarray(c.imag),
             a_corr[None, :] / np.abs(hf) ** 2, self._group, keep, kg, self._hr_coarse, self._hr_fine,
-            self._p_fine, cfg.grid_step_kpa,
+            self._p_fine, cfg.grid_step_kpa, int(math.ceil(4.0 * cfg.slope_step_kpa / cfg.grid_step_kpa)),
         )  # fmt: skip
         p_star, h_rr, interior = float(ps[0]), float(hs[0]), bool(inside[0])
         if not interior:
