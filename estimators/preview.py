@@ -42,20 +42,36 @@ monitor's single-corner estimate). By Laplace's method along the ridge
 :math:`p_r^*(p_f) = \arg\max_{p_r}\ell`:
 
 .. math:: p_r \sim \mathcal N\!\left(p_r^*(\hat p_f),\;
-   \frac{c_w}{H_{rr}} + \Big(\frac{dp_r^*}{dp_f}\Big)^2\sigma_f^2 + \sigma_\mathrm{floor}^2\right),
+   \frac{c_w\,s_\ell^2}{H_{rr}} + \Big(\frac{dp_r^*}{dp_f}\Big)^2\sigma_f^2 + \sigma_\mathrm{floor}^2\right),
    \qquad H_{rr} = -\partial^2\ell/\partial p_r^2,
 
 :math:`c_w = \sum w_k^2/\sum w_k` the sandwich factor of a weighted likelihood (1 without
-forgetting), :math:`\sigma_\mathrm{floor}` the model error: ``floor_kpa`` where the track's dynamic
-load coefficient DLC = std(m_s a_s + m_us a_us)/((m_s + m_us) g) is at most ``rough_dlc``,
+forgetting), :math:`s_\ell` = ``sigma_scale`` (default 2: on linear truth the error's std was 1.3–2.3
+times the likelihood's own σ, leakage correlating neighbouring frequencies),
+:math:`\sigma_\mathrm{floor}` the model error: ``floor_kpa`` where the track's dynamic load
+coefficient DLC = std(m_s a_s + m_us a_us)/((m_s + m_us) g) is at most ``rough_dlc``,
 ``rough_floor_kpa`` above (tyre lift-off and the suspension's stops: the linear ratio fails there).
 
-Measured on the MuJoCo SUV (100 constant-pressure runs, 30 s; research code of issue 12): the rear
-at the true front pressure −2.0 ± 2.5 kPa where DLC ≤ 1/3, −10 ± 12 kPa above; the 1 s segments'
-leakage alone biases it by about −1 kPa on linear truth. Band 20–40 Hz: above the wheel hop, where
-the ratio depends on k_t,r at 20–40 kPa per dB, and below where the simulated tyre's model error
-grows. Each corner's damping is fixed (default the low-speed end of its ``damping_range``), which
-was nearly as good as profiling it and 9× cheaper.
+Band 20–40 Hz: above the wheel hop, where the ratio depends on k_t,r at 20–40 kPa per dB, and
+below where the simulated tyre's model error grows. Each corner's damping is fixed (default the
+low-speed end of its ``damping_range``), which was nearly as good as profiling it and 9× cheaper.
+
+Measured (``python bench/preview_mujoco.py --runs-dir bench/_runs/constant``: 100 MuJoCo runs,
+constant pressures 130–230 kPa, 40–120 km/h, classes A–D, 0–300 kg, 200 tracks; error kPa, mean ±
+std [share within ±2σ]). At 30 s, the rear at the TRUE front pressure: −1.8 ± 2.6 [1.00] where
+DLC ≤ 1/3 (144 tracks), −9.7 ± 11.2 [0.96] above (56); on linear truth −0.6 to −1.0 ± 0.4–0.7
+(the 1 s segments' leakage). Given the online monitor's front estimate (at fc7192b): −2.9 ± 13.8
+[0.98], against the monitor's own rear +6.6 ± 17.6 [0.97]; both fused (:func:`fuse_track`):
+rear +0.7 ± 11.7 [0.96], front +2.5 ± 10.5 [0.94] (the monitor's own front +0.9 ± 10.7 [0.97]).
+At 10 s: fused rear +4.2 ± 20.1 [0.95], the monitor's own +10.6 ± 25.4 [0.99]. So the preview
+improves the rear; it does not improve the front.
+
+Use in a monitor: one :class:`PreviewTrack` per track (fl→rl, fr→rr) with ``memories`` = the
+monitor's memories; before each update ``decay(exp(−Δt/τ_m))`` per memory, then ``add`` the
+update's samples (NaN where the monitor's checks rejected a sample); after it, per memory,
+``conditional(p̂_f, σ_f)`` with the monitor's front at that memory and ``fuse_track`` with its rear,
+keeping the front's own estimate. Cost (one core, shared machine): ``add`` 0.17 ms per second of
+data in 4 s chunks (0.3 ms in 1 s chunks), ``conditional`` 0.3–0.5 ms; state 13 kB per track.
 
 No MuJoCo here: the preview consumes arrays.
 
@@ -310,9 +326,10 @@ def _per_memory(value, memories: int) -> np.ndarray | None:
 
 
 @cached_njit
-def _loglik_point(table, i, bg, cr, ci, ar, group, keep, kg, work):
+def _loglik_point(table, i, bg, cr, ci, ar, group, keep, kg, v0, work):
     """ℓ at row i of a rear table (3, P, F) (Re h_r, Im h_r, |h_r|²), given the per-band sums of B
-    `bg` (G,) and the front-normalized C/h̄_f (`cr`, `ci`) and A'/|h_f|² (`ar`), (F,)."""
+    `bg` (G,) and the front-normalized C/h̄_f (`cr`, `ci`) and A'/|h_f|² (`ar`), (F,); each band's
+    term is :func:`_band_term`."""
     for g in range(bg.size):
         work[g] = bg[g]
     for j in range(cr.size):
@@ -320,12 +337,23 @@ def _loglik_point(table, i, bg, cr, ci, ar, group, keep, kg, work):
     ll = 0.0
     for g in range(bg.size):
         if keep[g]:
-            ll -= kg[g] * np.log(max(work[g], 1e-300) / kg[g])
+            ll += _band_term(work[g], kg[g], v0)
     return ll
 
 
 @cached_njit
-def _ridge_kernel(b, c_re, c_im, a, group, keep, kg, coarse, fine, p_fine, step, window):
+def _band_term(q, k, v0):
+    """One band's profile log-likelihood, −K log(Q/K) with the residual variance σ² = Q/K, but σ² not
+    below `v0`, the rear accelerometer's own noise (DFT variance n σ_a²): with few segments the
+    noise-corrected Q can fall to zero or below (an estimated coherence above 1). Where Q/K < v0 the
+    term is −K log v0 − Q/v0 + K, which meets −K log(Q/K) with the same value and slope."""
+    if q >= k * v0:
+        return -k * np.log(q / k)
+    return -k * np.log(v0) - q / v0 + k
+
+
+@cached_njit
+def _ridge_kernel(b, c_re, c_im, a, group, keep, kg, v0, coarse, fine, p_fine, step, window):
     """For each front response r (rows of `c_re`, `c_im`, `a`, (R, F)): the coarse grid's best rear
     pressure, refined by the least-squares parabola through ℓ at the 9 fine points within ±`step`
     (kPa) of it. Row 0 searches the whole grid, the others `window` coarse points either side of
@@ -348,7 +376,7 @@ def _ridge_kernel(b, c_re, c_im, a, group, keep, kg, coarse, fine, p_fine, step,
             lo, hi = max(ib0 - window, 0), min(ib0 + window, n_p - 1)
         best, ib = -np.inf, lo
         for i in range(lo, hi + 1):
-            ll = _loglik_point(coarse, i, bg, c_re[r], c_im[r], a[r], group, keep, kg, work)
+            ll = _loglik_point(coarse, i, bg, c_re[r], c_im[r], a[r], group, keep, kg, v0, work)
             if ll > best:
                 best, ib = ll, i
         if r == 0:
@@ -360,7 +388,7 @@ def _ridge_kernel(b, c_re, c_im, a, group, keep, kg, coarse, fine, p_fine, step,
         # parabola ℓ ≈ c0 + c1 x + c2 x² on x = (k − 4) h, k = 0..8: x and x² − mean(x²) are orthogonal
         s1 = s2 = 0.0
         for k in range(9):
-            ll = _loglik_point(fine, 4 * ib - 4 + k, bg, c_re[r], c_im[r], a[r], group, keep, kg, work)
+            ll = _loglik_point(fine, 4 * ib - 4 + k, bg, c_re[r], c_im[r], a[r], group, keep, kg, v0, work)
             x = (k - 4) * h
             s1 += x * ll
             s2 += (x * x - 60.0 * h * h / 9.0) * ll
@@ -673,7 +701,11 @@ class PreviewTrack:
             + hr[2] @ (a[:, None] * ind)
         )
         kk = kg[keep]
-        return -np.sum(kk * np.log(np.maximum(qg, 1e-300) / kk), axis=-1)
+        v0 = self._noise_dft
+        terms = np.where(
+            qg >= kk * v0, -kk * np.log(np.maximum(qg, kk * v0) / kk), -kk * np.log(v0) - qg / v0 + kk
+        )  # _band_term
+        return np.sum(terms, axis=-1)
 
     def loglik(self, p_front_kpa: npt.ArrayLike, p_rear_kpa: npt.ArrayLike, *, memory: int = 0) -> np.ndarray:
         """The profile log-likelihood ℓ(p_f, p_r) of the module docstring, any broadcastable shapes
@@ -761,8 +793,9 @@ class PreviewTrack:
         c = self.C[mem][None, :] / np.conj(hf)
         ps, hs, inside = _ridge_kernel(
             self.B[mem], np.ascontiguousarray(c.real), np.ascontiguousarray(c.imag),
-            a_corr[None, :] / np.abs(hf) ** 2, self._group, keep, kg, self._hr_coarse, self._hr_fine,
-            self._p_fine, cfg.grid_step_kpa, int(math.ceil(4.0 * cfg.slope_step_kpa / cfg.grid_step_kpa)),
+            a_corr[None, :] / np.abs(hf) ** 2, self._group, keep, kg, self._noise_dft, self._hr_coarse,
+            self._hr_fine, self._p_fine, cfg.grid_step_kpa,
+            int(math.ceil(4.0 * cfg.slope_step_kpa / cfg.grid_step_kpa)),
         )  # fmt: skip
         p_star, h_rr, interior = float(ps[0]), float(hs[0]), bool(inside[0])
         if not interior:

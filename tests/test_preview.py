@@ -62,8 +62,10 @@ def _corner(qc, kt: float, zr, vr) -> np.ndarray:
     return 0.5 * (heave + roll)
 
 
-def _two_corners(p_front_kpa: float, p_rear_kpa: float, speed: float, duration_s: float, seed: int):
-    """Front and rear unsprung accelerations (measured: with noise) on one track of an ISO road."""
+def _two_corners(p_front_kpa: float, p_rear_kpa, speed: float, duration_s: float, seed: int):
+    """Front and rear unsprung accelerations (measured: with noise) on one track of an ISO road;
+    `p_rear_kpa` a pressure, or (before, after, change time s): the rear's response at each pressure
+    from the start, spliced at the change."""
     rng = np.random.default_rng(seed)
     tire = suv_tire_stiffness()
     length = speed * duration_s + WHEELBASE + 20.0
@@ -75,12 +77,20 @@ def _two_corners(p_front_kpa: float, p_rear_kpa: float, speed: float, duration_s
     slope = np.gradient(z, x)
     t = np.arange(int(round(duration_s / DT))) * DT
     front_x = WHEELBASE + 10.0 + speed * t  # the rear wheel is a wheelbase behind, on the same track
-    out = []
-    for qc, p, pos in zip(_models(), (p_front_kpa, p_rear_kpa), (front_x, front_x - WHEELBASE), strict=True):
+    qf, qr = _models()
+    rear_x = front_x - WHEELBASE
+
+    def response(qc, p, pos):
         kt = tire.kt0 * (1.0 + tire.pfz1 * (p * 1e3 - tire.p0) / tire.p0)  # Brancati & Tufano eq. 3–4
-        acc = _corner(qc, kt, np.interp(pos, x, z), speed * np.interp(pos, x, slope))
-        out.append(acc + NOISE * rng.standard_normal(acc.size))
-    return out
+        return _corner(qc, kt, np.interp(pos, x, z), speed * np.interp(pos, x, slope))
+
+    front = response(qf, p_front_kpa, front_x)
+    if np.ndim(p_rear_kpa) == 0:
+        rear = response(qr, p_rear_kpa, rear_x)
+    else:
+        before, after, t_change = p_rear_kpa
+        rear = np.where(t < t_change, response(qr, before, rear_x), response(qr, after, rear_x))
+    return [a + NOISE * rng.standard_normal(a.size) for a in (front, rear)]
 
 
 @pytest.fixture(scope="module")
@@ -141,6 +151,24 @@ def test_little_data_is_not_informative(linear_run):
     rng = np.random.default_rng(1)
     quiet.add(NOISE * rng.standard_normal(8000), NOISE * rng.standard_normal(8000), speed)  # noise only
     assert quiet.conditional(200.0, 5.0).reason == "low_snr"
+
+
+def test_a_short_memory_follows_a_pressure_change():
+    """The rear drops 200 → 160 kPa at 12 s: at 24 s the memory forgetting with τ = 3 s is at the new
+    pressure within its σ, the one that never forgets sits between the two."""
+    speed = 60 / 3.6
+    front, rear = _two_corners(200.0, (200.0, 160.0, 12.0), speed, 24.0, seed=21)
+    qf, qr = _models()
+    tire = suv_tire_stiffness()
+    track = PreviewTrack(qf, qr, tire, tire, DT, WHEELBASE, memories=2)
+    for i in range(0, front.size, 4000):  # the monitor's 4 s updates
+        track.decay([np.exp(-4.0 / 3.0), 1.0])
+        track.add(front[i : i + 4000], rear[i : i + 4000], speed)
+    short, long = (track.conditional(200.0, 0.0, memory=m, dlc=0.1) for m in (0, 1))
+    assert short.informative and long.informative
+    assert abs(short.mean_kpa - 160.0) < min(2.0 * short.sigma_kpa, 6.0), short
+    assert 165.0 < long.mean_kpa < 195.0, long
+    assert short.segments < 8.0 < long.segments  # effective segments: (Σw)²/Σw²
 
 
 def _direct_statistics(front, rear, speed, n, band, wheelbase):
