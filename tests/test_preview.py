@@ -144,6 +144,10 @@ def test_little_data_is_not_informative(linear_run):
     assert track.counts == {"used": 1, "gap": 0, "speed": 0, "warmup": 1}
     out = track.conditional(200.0, 5.0)
     assert not out.informative and out.reason == "few_segments"
+    track.add(front[2000:4000], rear[2000:4000], speed)
+    out = track.conditional(205.0, 0.0)  # 3 segments: a wide likelihood, not a spuriously sharp one
+    assert out.informative and 0.5 < out.sigma_likelihood_kpa < 10.0, out
+    assert abs(out.mean_kpa - 165.0) < 3.0 * out.sigma_likelihood_kpa
     slow = PreviewTrack(qf, qr, tire, tire, DT, WHEELBASE)
     slow.add(front[:5000], rear[:5000], 3.0)  # below min_speed_mps
     assert slow.counts["speed"] == 5 and slow.conditional(200.0, 5.0).reason == "no_segments"
