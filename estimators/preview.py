@@ -70,8 +70,9 @@ Use in a monitor: one :class:`PreviewTrack` per track (fl→rl, fr→rr) with ``
 monitor's memories; before each update ``decay(exp(−Δt/τ_m))`` per memory, then ``add`` the
 update's samples (NaN where the monitor's checks rejected a sample); after it, per memory,
 ``conditional(p̂_f, σ_f)`` with the monitor's front at that memory and ``fuse_track`` with its rear,
-keeping the front's own estimate. Cost (one core, shared machine): ``add`` 0.17 ms per second of
-data in 4 s chunks (0.3 ms in 1 s chunks), ``conditional`` 0.3–0.5 ms; state 13 kB per track.
+keeping the front's own estimate. Cost (one core of a loaded 2-core machine, 3 memories): ``add``
+0.17–0.21 ms per second of data in 4 s chunks (0.3–0.4 ms in 1 s chunks), ``conditional``
+0.3–0.5 ms per call; state 13 kB per track and memory.
 
 No MuJoCo here: the preview consumes arrays.
 
