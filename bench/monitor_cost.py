@@ -49,6 +49,7 @@ def main() -> None:
     minutes = float(sys.argv[1]) if len(sys.argv) > 1 else 60.0
     path = sys.argv[2] if len(sys.argv) > 2 else _run_file()
     from suvtwin.estimators.monitor import TyreMonitor
+    from suvtwin.mjcf.vehicle import load_vehicle
     from suvtwin.pipeline.monitoring import corner_models
 
     frame = pq.read_table(path).to_pandas()
@@ -58,7 +59,8 @@ def main() -> None:
     acc_s = frame[[f"{c}_accel_sprung_mps2" for c in CORNERS]].to_numpy()
     acc_u = frame[[f"{c}_accel_unsprung_mps2" for c in CORNERS]].to_numpy()
     n = t0.size
-    monitor = TyreMonitor(corner_models(CORNERS), dt=dt, names=CORNERS)
+    monitor = TyreMonitor(corner_models(CORNERS), dt=dt, names=CORNERS, tracks=((0, 2), (1, 3)),
+                          wheelbase_m=load_vehicle().wheelbase)  # the four corners and both tracks' preview
     chunk = int(round(10.0 / dt))
     start = time.perf_counter()
     monitor.update(np.arange(chunk) * dt, v[:chunk], acc_s[:chunk], acc_u[:chunk])  # compiles

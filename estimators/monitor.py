@@ -104,6 +104,7 @@ from scipy.special import ndtr
 
 from suvtwin.errors import InputError
 from suvtwin.estimators.joint import N0, LinearQuarterCar, profile_loglik, signal_direction, signal_gain
+from suvtwin.estimators.preview import PreviewConfig, PreviewTrack, fuse_track
 from suvtwin.estimators.quarter_car import stiffness_from_pressure
 from suvtwin.jit import cached_njit
 from suvtwin.suspension_law import equivalent_spring_rate
@@ -548,6 +549,12 @@ class TyreMonitor:
         Each corner's k_t(p) law (eq. 3–4); default the SUV's tyre on every corner.
     names : sequence of str, optional
         Corner names for messages (default ``c0, c1, …``).
+    tracks : sequence of (int, int), optional
+        (front, rear) column pairs of corners on one track: the rear's estimate is fused with the
+        front→rear preview (:mod:`suvtwin.estimators.preview`) of each memory. Needs `wheelbase_m`.
+    wheelbase_m : float, optional
+        Distance from the front to the rear axle, m.
+    preview_config : PreviewConfig, optional
     """
 
     def __init__(
@@ -558,6 +565,9 @@ class TyreMonitor:
         config: MonitorConfig | None = None,
         tire: TireStiffness | list[TireStiffness] | tuple[TireStiffness, ...] | None = None,
         names: list[str] | tuple[str, ...] | None = None,
+        tracks: tuple[tuple[int, int], ...] | list = (),
+        wheelbase_m: float | None = None,
+        preview_config: PreviewConfig | None = None,
     ) -> None:
         if not (np.isfinite(dt) and 1e-5 <= dt <= 0.05):
             raise InputError(f"sampling interval dt must be within 1e-5–0.05 s, got {dt!r}")
@@ -577,7 +587,7 @@ class TyreMonitor:
         if self.hop < 32:
             raise InputError(f"update_s = {cfg.update_s} s holds fewer than 32 samples at dt = {dt} s")
         freq = np.fft.rfftfreq(self.window, dt)
-        self._f_index = np.flatnonzero((freq > 0) & (freq <= cfg.max_frequency_hz))
+        self._f_index = np.flatnonzero((freq > 0) & (freq <= cfg.max_frequency_hz * (1.0 + 1e-9)))
         fine = freq[self._f_index]
         # bands: single frequencies below merge_above_hz, groups of ~merge_width_hz above
         per_group = max(int(round(cfg.merge_width_hz * cfg.segment_s)), 1)
@@ -628,6 +638,18 @@ class TyreMonitor:
         for c in range(n_c):
             self._slot(c, 0)
         self._nonlinear = any(qc.suspension is not None for qc in self.models)
+        self.tracks = tuple((int(f), int(r)) for f, r in tracks)
+        used = [c for pair in self.tracks for c in pair]
+        if self.tracks and (wheelbase_m is None or any(not 0 <= c < n_c for c in used)
+                            or len(set(used)) != len(used)):  # fmt: skip
+            raise InputError(
+                f"tracks must be (front, rear) pairs of distinct corner indices 0–{n_c - 1}, with wheelbase_m"
+            )
+        self._previews = [
+            PreviewTrack(self.models[f], self.models[r], self.tires[f], self.tires[r], dt, float(wheelbase_m),
+                         preview_config, memories=len(cfg.memories_s))
+            for f, r in self.tracks
+        ]  # fmt: skip
         self._laws = np.array([[t.kt0, t.p0, t.pfz1] for t in self.tires]).T  # (3, C): eq. 3–4 per corner
         self._prior = np.array(
             [t.p0 / 1e3 if cfg.prior_pressure_kpa is None else cfg.prior_pressure_kpa for t in self.tires]
@@ -736,6 +758,8 @@ class TyreMonitor:
     # ------------------------------------------------------------------ state
     def reset(self) -> None:
         """Forget everything (a new drive with unknown pressures)."""
+        for track in getattr(self, "_previews", []):
+            track.reset()
         n_m, n_c = len(self.config.memories_s), len(self.models)
         shape = (n_m, n_c, self.n_bins)
         self._state = _State(
@@ -787,7 +811,7 @@ class TyreMonitor:
             s.recent_i,
             s.recent_p,
         ]
-        return int(sum(a.nbytes for a in arrays))
+        return int(sum(a.nbytes for a in arrays)) + sum(t.state_nbytes for t in self._previews)
 
     @property
     def counts(self) -> dict:
@@ -842,6 +866,8 @@ class TyreMonitor:
         return MonitorUpdate.concatenate(rows)
 
     def _clear_buffer(self) -> None:
+        for track in self._previews:
+            track.break_stream()
         s = self._state
         n_c = len(self.models)
         s.buffer_t, s.buffer_v = np.empty(0), np.empty(0)
@@ -954,6 +980,7 @@ class TyreMonitor:
         t_end = float(t[-1])
         elapsed = cfg.update_s if not np.isfinite(s.last_segment_t) else t_end - s.last_segment_t
         s.last_segment_t = t_end
+        self._feed_previews(block, s.blocks[-1], elapsed)
         restarts = np.zeros(n_c, dtype=int)
         analysed_rate, analysed_touch = np.full(n_c, np.nan), np.full(n_c, np.nan)
         if np.any(used):
@@ -1015,11 +1042,26 @@ class TyreMonitor:
                 self._rebuild(c, int(start[c]), t_end)
                 restarts[c] += 1
             s.counts["restarts"] += restarts
+            for track, (f, r) in zip(self._previews, self.tracks, strict=True):
+                if restarts[f] or restarts[r]:
+                    track.reset()  # its ratio changed: start it afresh
         else:
             self._forget(elapsed)  # time passes: memories fade
         s.fits = self._fit_all(s.fits)
         self._n_updates += 1
         return self._output(t_end, speed, status, restarts, analysed_rate, analysed_touch)
+
+    def _feed_previews(self, block, status: np.ndarray, elapsed: float) -> None:
+        """Forget and add the new block to each track's preview (a corner's faulty block as NaN)."""
+        if not self._previews:
+            return
+        _, v, a_s, a_u = block
+        decay = np.exp(-elapsed / np.asarray(self.config.memories_s, dtype=float))
+        for track, (f, r) in zip(self._previews, self.tracks, strict=True):
+            track.decay(decay)
+            ok = status[f] == _USED and status[r] == _USED
+            pick = (lambda x, c: x[:, c]) if ok else (lambda x, c: np.full(x.shape[0], np.nan))  # noqa: E731
+            track.add(pick(a_u, f), pick(a_u, r), v, acc_s_front=pick(a_s, f), acc_s_rear=pick(a_s, r))
 
     def _speed_bin(self, speed: float) -> int:
         """Index of the accumulators' speed bin nearest `speed` (m/s), geometric bins."""
@@ -1334,6 +1376,25 @@ class TyreMonitor:
             lam[r] = lam_r[0, best]
         return lam, p0
 
+    def _fuse_previews(self, means: np.ndarray, vars_: np.ndarray, pi: np.ndarray):
+        """Each rear's per-memory estimate fused with its track's preview given the front's
+        (:func:`suvtwin.estimators.preview.fuse_track`; the front keeps its own): (C, M) kPa, kPa²."""
+        if not self._previews:
+            return means, vars_
+        means, vars_ = means.copy(), vars_.copy()
+        lo, hi = self._previews[0].config.pressure_range_kpa
+        for track, (f, r) in zip(self._previews, self.tracks, strict=True):
+            for m in range(means.shape[1]):
+                if pi[r, m] < 1e-3 or not np.isfinite(means[f, m]):
+                    continue
+                p_f = float(np.clip(means[f, m], lo, hi))
+                cond = track.conditional(p_f, math.sqrt(vars_[f, m]), memory=m)
+                if not cond.informative:
+                    continue
+                mean, cov = fuse_track(p_f, math.sqrt(vars_[f, m]), means[r, m], math.sqrt(vars_[r, m]), cond)
+                means[r, m], vars_[r, m] = mean[1], cov[1, 1]
+        return means, vars_
+
     # ------------------------------------------------------------------ output
     def _output(self, t_end, speed, status, restarts, spring_rate, tyre_contact) -> MonitorUpdate:
         cfg = self.config
@@ -1343,6 +1404,7 @@ class TyreMonitor:
         pi /= pi.sum(axis=1, keepdims=True)  # (C, M)
         means = np.array([f.p_mean for f in s.fits]).T  # (C, M)
         vars_ = np.array([f.p_var for f in s.fits]).T
+        means, vars_ = self._fuse_previews(means, vars_, pi)
         p = np.sum(pi * means, axis=1)
         var = np.sum(pi * (vars_ + (means - p[:, None]) ** 2), axis=1)
         sigma = np.sqrt(var)

@@ -533,6 +533,12 @@ class PreviewTrack:
         )  # rear, speed, sprung front, sprung rear, unsprung front since segment start
         self._sprung = None  # whether sprung accelerations are given (fixed by the first call)
 
+    def break_stream(self) -> None:
+        """The stream jumps in time: drop the buffered samples (the front's history and the rear's
+        unfinished segment), keep the statistics."""
+        self._front = np.zeros(0)
+        self._pending = np.zeros((5, 0))
+
     @property
     def state_nbytes(self) -> int:
         """Bytes held by the statistics and buffers (bounded)."""

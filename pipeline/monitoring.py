@@ -24,7 +24,7 @@ from suvtwin.errors import InputError
 from suvtwin.estimators.deflation import DeflationRule, deflation_warnings
 from suvtwin.estimators.monitor import SKIP_REASONS, MonitorConfig, MonitorUpdate, TyreMonitor
 from suvtwin.files import atomic_write, read_parquet_table
-from suvtwin.mjcf.vehicle import CORNERS
+from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
 from suvtwin.pipeline.estimation import (
     check_time_axis,
     corner_sprung_mass,
@@ -72,18 +72,25 @@ def monitor_signals(
     tire_file: str | Path | None = None,
     config: MonitorConfig | None = None,
     chunk_s: float = 10.0,
+    preview: bool = True,
 ) -> tuple[TyreMonitor, MonitorUpdate]:
     """Stream arrays through a new monitor in chunks of `chunk_s` s; the monitor and all its rows.
 
     `acc_sprung`, `acc_unsprung`: (T, C) in the order of `corners`; `loads`: the extra loads on the
-    chassis, (kg, (x, y, z) m from the CoG) each (:func:`corner_models`)."""
+    chassis, (kg, (x, y, z) m from the CoG) each (:func:`corner_models`); `preview`: fuse each rear
+    tyre with the front→rear preview of its track (when both its corners are monitored)."""
     t = np.asarray(t_s, dtype=float)
     if t.size < 2:
         raise InputError("a run needs at least two samples")
-    dt = float(np.median(np.diff(t)))
+    # the sampling interval to 12 significant digits: a record's float time stamps give medians that
+    # differ in the last bits with its length, and the estimate at t must not depend on what follows t
+    dt = float(f"{np.median(np.diff(t)):.12g}")
+    tracks = [(corners.index(f), corners.index(r)) for f, r in (("fl", "rl"), ("fr", "rr"))
+              if f in corners and r in corners]  # fmt: skip
     monitor = TyreMonitor(
         corner_models(corners, loads=loads, tire_file=tire_file), dt=dt, config=config,
         tire=[tire_stiffness_of(tire_file)] * len(corners), names=corners,
+        tracks=tracks if preview else (), wheelbase_m=load_vehicle().wheelbase,
     )  # fmt: skip
     step = max(int(round(chunk_s / dt)), 1)
     parts = [
