@@ -86,7 +86,7 @@ def main() -> None:
         tire = tire_stiffness_of(tire_file)
         dt = float(np.mean(np.diff(col["t_s"])))
         p_true = {c: float(np.mean(col[f"{c}_pressure_kpa"])) for c in CORNERS}
-        mon = None if a.no_monitor else monitor_run(path).table
+        mon = None if a.no_monitor else monitor_run(path, preview=False).table  # the rear on its own
         step = int(round(1.0 / dt))
         for front, rear in TRACKS:
             track = PreviewTrack(models[front], models[rear], tire, tire, dt, wheelbase, config)

@@ -72,7 +72,15 @@ rectangular, linear detrend; above ``merge_above_hz`` the periodogram is average
    when first needed and kept (at most ``table_slots``, least recently used replaced). Where the
    linearized travel is on a stop or the wheel off the ground more than ``max_nonlinear_share``
    of the time no linear model holds, and the window is skipped (``rough``).
-7. **Observability.** A corner whose σ exceeds ``observable_sigma_kpa`` (no usable data in
+7. **The front→rear preview** (``tracks``): each rear wheel runs over its front wheel's track a
+   wheelbase/speed later, so the rear's unsprung acceleration is the front's through the ratio
+   of the two wheels' responses (:mod:`suvtwin.estimators.preview`: 1 s segments on 20–40 Hz,
+   the road cancels). Each track keeps that likelihood's statistics with the same memories; at
+   each update, per memory, the rear's pressure given the front's estimate (Laplace along the
+   likelihood's ridge, with a model-error floor) is fused with the rear's own
+   (:func:`suvtwin.estimators.preview.fuse_track`); the front keeps its own. A restart of either
+   corner by the change test restarts the track's preview.
+8. **Observability.** A corner whose σ exceeds ``observable_sigma_kpa`` (no usable data in
    memory: low speed, flat road, faulty sensor) is flagged not observable; its estimate
    then relaxes to the prior (``prior_pressure_kpa`` ± ``prior_sigma_kpa``) as the memory
    fades, instead of holding an old value with a small σ.

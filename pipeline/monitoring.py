@@ -111,6 +111,7 @@ def monitor_run(
     config: MonitorConfig | None = None,
     rule: DeflationRule | None = None,
     chunk_s: float = 10.0,
+    preview: bool = True,
 ) -> MonitorResult:
     """Run the monitor and the deflation warning on a run file.
 
@@ -121,7 +122,8 @@ def monitor_run(
     ``used`` or why skipped), ``{c}_reference_kpa``, ``{c}_loss_probability``, ``{c}_warning``
     (latched), ``{c}_spring_rate_npm`` and ``{c}_tyre_contact`` (the suspension rate and tyre contact
     share the window was analysed with: :class:`~suvtwin.estimators.monitor.MonitorUpdate`), and the
-    shared ``road_level_hat_m3`` and ``waviness_hat``.
+    shared ``road_level_hat_m3`` and ``waviness_hat``. `preview`: fuse each rear tyre with the
+    front→rear preview of its track (:func:`monitor_signals`).
     """
     unknown = [c for c in corners if c not in CORNERS]
     if unknown or not corners:
@@ -146,7 +148,7 @@ def monitor_run(
     acc_u = frame[[f"{c}_accel_unsprung_mps2" for c in corners]].to_numpy(dtype=float)
     monitor, update = monitor_signals(
         t, frame["speed_mps"].to_numpy(dtype=float), acc_s, acc_u, corners=corners, loads=loads,
-        tire_file=tire_file, config=config, chunk_s=chunk_s,
+        tire_file=tire_file, config=config, chunk_s=chunk_s, preview=preview,
     )  # fmt: skip
     rule = rule or DeflationRule()
     warn = deflation_warnings(
