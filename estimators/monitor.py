@@ -78,7 +78,8 @@ rectangular, linear detrend; above ``merge_above_hz`` the periodogram is average
    the road cancels). Each track keeps that likelihood's statistics with the same memories; at
    each update, per memory, the rear's pressure given the front's estimate (Laplace along the
    likelihood's ridge, with a model-error floor) is fused with the rear's own
-   (:func:`suvtwin.estimators.preview.fuse_track`); the front keeps its own. A restart of either
+   (:func:`suvtwin.estimators.preview.fuse_track`); the front keeps its own. A memory whose front
+   is not observable (σ above ``observable_sigma_kpa``) passes nothing on. A restart of either
    corner by the change test restarts the track's preview.
 8. **Observability.** A corner whose σ exceeds ``observable_sigma_kpa`` (no usable data in
    memory: low speed, flat road, faulty sensor) is flagged not observable; its estimate
@@ -1391,9 +1392,11 @@ class TyreMonitor:
             return means, vars_
         means, vars_ = means.copy(), vars_.copy()
         lo, hi = self._previews[0].config.pressure_range_kpa
+        limit = self.config.observable_sigma_kpa**2
         for track, (f, r) in zip(self._previews, self.tracks, strict=True):
             for m in range(means.shape[1]):
-                if pi[r, m] < 1e-3 or not np.isfinite(means[f, m]):
+                # a front without information of its own (not observable: at its prior) has none to pass on
+                if pi[r, m] < 1e-3 or not np.isfinite(means[f, m]) or vars_[f, m] > limit:
                     continue
                 p_f = float(np.clip(means[f, m], lo, hi))
                 cond = track.conditional(p_f, math.sqrt(vars_[f, m]), memory=m)
