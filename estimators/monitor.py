@@ -636,6 +636,8 @@ class TyreMonitor:
         omega2 = (2.0 * np.pi * self.freq) ** 2
         in_travel = self.freq >= cfg.travel_min_hz
         self._travel_weight = np.where(in_travel, self._group_size / (cfg.segment_s * omega2), 0.0)
+        self._travel_x_weight = self._travel_weight / omega2  # /(2πf)² once more: travel
+        self._band_df = self._travel_weight * omega2  # Σ S Δf over the same band
         self._slot_of: dict[tuple[int, int], int] = {}
         self._slot_used = np.zeros(0, dtype=np.int64)
         self._n_updates = 0
@@ -739,8 +741,7 @@ class TyreMonitor:
         rel = spec[..., 0].real + spec[..., 1].real - 2.0 * spec[..., 2].real  # S of a_s − a_u
         rel = np.maximum(rel - 2.0 * self.noise, 0.0)
         var_v = rel @ self._travel_weight
-        var_x = rel @ (self._travel_weight / (2.0 * np.pi * self.freq) ** 2)
-        band_df = self._travel_weight * (2.0 * np.pi * self.freq) ** 2  # Σ S Δf over the same band
+        var_x = rel @ self._travel_x_weight
         log_step = math.log1p(self.config.rate_step)
         for c in np.unique(corners):
             qc = self.models[c]
@@ -750,7 +751,7 @@ class TyreMonitor:
             sub = spec[here]
             ms, mu = qc.sprung_mass, qc.unsprung_mass
             load = ms**2 * sub[..., 0].real + mu**2 * sub[..., 1].real + 2.0 * ms * mu * sub[..., 2].real
-            var_f = np.maximum(load - (ms**2 + mu**2) * self.noise, 0.0) @ band_df
+            var_f = np.maximum(load - (ms**2 + mu**2) * self.noise, 0.0) @ self._band_df
             contact = ndtr((ms + mu) * _GRAVITY / np.sqrt(np.maximum(var_f, 1e-12)))
             lift = np.rint(-np.log(np.maximum(contact, 0.05)) / log_step).astype(int)
             sd = np.sqrt(var_x[here])
