@@ -87,6 +87,9 @@ def _level_ratio(runs, extras) -> dict | None:
     ]
     if not ratio:
         return None
+    ratio = [x for x in ratio if np.isfinite(x)]  # NaN: the last window unused
+    if not ratio:
+        return None
     q = np.percentile(ratio, [10, 50, 90])
     return {"runs": len(ratio), "p10": float(q[0]), "median": float(q[1]), "p90": float(q[2])}
 

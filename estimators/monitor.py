@@ -29,37 +29,43 @@ rectangular, linear detrend; above ``merge_above_hz`` the periodogram is average
    ``hop_margin`` times the corner's wheel-hop frequency: there k_t barely changes the
    spectrum (the Cramér–Rao bound at 25 km/h is ~60 kPa after 10 s), so the window is not
    used for k_t. Each skip is counted, by reason, in the output; nothing is fatal.
-2. **Sufficient statistics with forgetting.** Each used window's 2×2 cross-periodogram of
-   (sprung, unsprung) acceleration, weighted by update_s/segment_s (each sample lies in that
-   many windows), is added to accumulators binned by speed (bins ``speed_bin_ratio`` wide: the
-   road-velocity PSD and the band scale with speed). Every accumulator decays as
-   :math:`e^{-\Delta t/\tau}` in time: a weighted likelihood. The state is these accumulators
-   and the last ``change_window_s`` of windows: its size is fixed by the frequency grid, the
-   speed bins and the corners, so the cost per second of data is the same after 10 s and after
-   10 h (``bench/monitor_cost.py``).
-3. **Estimates per memory.** For each memory τ in ``memories_s`` and each corner, the log level,
-   the waviness slope β = 2 − w and the pressure maximize the weighted Whittle likelihood by
-   Fisher scoring, warm-started (all memories and corners in one compiled call); the corner
-   damping (a digressive damper's equivalent linear damping) is marginalized over
-   ``damping_points`` values of its range, and the waviness has the joint estimator's
-   spike-and-slab prior (w = 2 with probability ``waviness_iso_weight``). σ comes from the
-   inverse Fisher information of the corner's parameters together, corrected by the sandwich
-   factor of a weighted likelihood, :math:`\sum w_k^2/\sum w_k`, which makes it the error std
-   of the estimate under a constant pressure rather than the conservative
-   :math:`(\sum w_k I)^{-1}`.
-4. **Choosing the memory.** Before a window is added, each memory's estimate predicts the
-   newest ``update_s`` of data: the score is its Whittle log-likelihood at that memory's
-   parameters, less half the information it carries times the memory's variance (the expected
-   log predictive density, Gaussian approximation). Per corner, the scores are summed with
-   forgetting (``selection_s``) and the memories weighted by them (dynamic model averaging
-   [2]_): a long memory wins while the pressure is steady, a short one while it changes; the
-   output is their mixture (mean and variance).
+2. **Each window's likelihood on a grid.** Each used window's 2×2 cross-periodogram of
+   (sprung, unsprung) acceleration gives its Whittle log-likelihood on a fixed grid of the
+   corner's unknowns: ``damping_points`` dampings over the model's ``damping_range`` (a
+   digressive damper's equivalent linear damping), the waviness w at ``waviness_points`` values
+   over ``waviness_range`` and at w = 2, and the pressure every ``grid_step_kpa`` over
+   ``pressure_range_kpa``. The window's own road level is integrated out (Laplace, with its
+   maximum found by warm-started Fisher scoring, all corners in one compiled call,
+   :func:`_window_loglik`): each window may sit on a rougher or smoother stretch of road, so a
+   change of roughness is not taken for one of pressure. The window's log-likelihood is weighted
+   by update_s/segment_s (each sample lies in that many windows).
+3. **Memories: forgotten sums of log-likelihoods.** For each memory τ in ``memories_s`` the
+   windows' log-likelihoods are summed with weights :math:`e^{-\Delta t/\tau}` (a weighted
+   likelihood). The state is these grids and the last ``change_window_s`` of windows' grids: its
+   size is fixed by the grid, the memories and the corners (about 1 MB for four corners), so the
+   cost per second of data is the same after 10 s and after 10 h (``bench/monitor_cost.py``).
+   Each memory's posterior on the grid (the sum spline-interpolated to 1 kPa, times the sandwich
+   factor κ of a weighted likelihood; a Gaussian prior on p cut to the range; the joint
+   estimator's spike-and-slab prior on w, w = 2 with probability ``waviness_iso_weight``; equal
+   weights on the dampings) gives the pressure's mean and σ, and the waviness's, with the damping
+   and the waviness marginalized exactly rather than fitted. κ = Σρw/Σρ²w² (between 1 and its
+   steady-data value 1 + e^(−update/τ)) makes the posterior's width the error std of the
+   estimate under a constant pressure instead of the conservative width of the forgotten
+   information.
+4. **Choosing the memory.** Before a window is added, each memory's posterior predicts the
+   newest ``update_s`` of data: the score is the log predictive density of that block,
+   :math:`\log \sum_\theta \pi_m(\theta) e^{\ell(\theta)}` over the grid. Per corner, the
+   scores are summed with forgetting (``selection_s``) and the memories weighted by them (dynamic
+   model averaging [2]_): a long memory should win while the pressure is steady, a short one
+   while it changes; the output is their mixture (mean and variance). On the MuJoCo SUV the
+   memories' predictive scores of one block differ by only a few hundredths of a nat, so the
+   weights stay near equal and the mixture is wider than the longest memory (README).
 5. **Change detection.** A generalized likelihood ratio test [4]_ looks for a step in each
-   tyre's pressure within the last ``change_window_s``: the windows' scores and information in
-   p at the longest memory's estimate, summed from each candidate start to now, give
-   GLR = U²/(2I); above ``change_nats`` every memory of that tyre is rebuilt from the windows
-   since the change's start, so after an abrupt change (or a change of road roughness, which
-   the test also sees) the memory is cut, not left to fade.
+   tyre's pressure within the last ``change_window_s``: for each candidate start, the windows
+   from it on (at the longest memory's likeliest damping and waviness) are summed on the grid;
+   the test statistic is their maximum over p less their value at the longest memory's
+   estimate. Above ``change_nats`` every memory of that tyre is rebuilt exactly from the windows
+   since the change's start, so after an abrupt change the memory is cut, not left to fade.
 6. **The suspension and the tyre, linearized at the measured travel.** A corner model with a
    suspension law (``LinearQuarterCar.suspension``: a progressive spring with stops, a
    digressive damper) is analysed at its statistically linearized rate
@@ -109,10 +115,11 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 import numpy.typing as npt
+from scipy.interpolate import CubicSpline
 from scipy.special import ndtr
 
 from suvtwin.errors import InputError
-from suvtwin.estimators.joint import N0, LinearQuarterCar, profile_loglik, signal_direction, signal_gain
+from suvtwin.estimators.joint import N0, LinearQuarterCar, signal_direction, signal_gain
 from suvtwin.estimators.preview import PreviewConfig, PreviewTrack, fuse_track
 from suvtwin.estimators.quarter_car import stiffness_from_pressure
 from suvtwin.jit import cached_njit
@@ -182,12 +189,15 @@ class MonitorConfig:
         Range of the road waviness w.
     waviness_iso_weight : float
         Prior probability that w = 2 exactly (spike and slab).
+    waviness_points : int
+        Values of w over ``waviness_range`` in the slab (marginalized, with w = 2 beside them).
     damping_points : int
         Damping values over the corner model's ``damping_range`` (marginalized).
+    grid_step_kpa : float
+        Step of the pressure grid each window's likelihood is evaluated on, kPa (interpolated to
+        1 kPa by a cubic spline for the posteriors: the log-likelihood is smooth on that scale).
     hop_margin : float
         A segment informs k_t only if its band reaches this times the wheel-hop frequency.
-    speed_bin_ratio : float
-        Ratio of neighbouring speed bins of the accumulators.
     max_speed_change : float
         Largest (max − min)/mean speed within a used segment.
     accel_range_mps2 : float or None
@@ -231,9 +241,10 @@ class MonitorConfig:
     prior_sigma_kpa: float = 100.0
     waviness_range: tuple[float, float] = (1.5, 3.0)
     waviness_iso_weight: float = 0.8
+    waviness_points: int = 5
     damping_points: int = 3
+    grid_step_kpa: float = 8.0
     hop_margin: float = 1.25
-    speed_bin_ratio: float = 1.05
     max_speed_change: float = 0.1
     accel_range_mps2: float | None = None
     max_accel_mps2: float = 1000.0
@@ -280,9 +291,10 @@ class MonitorConfig:
             ("prior_sigma_kpa", self.prior_sigma_kpa > 0, "> 0"),
             ("waviness_range", self.waviness_range[0] <= self.waviness_range[1], "low ≤ high"),
             ("waviness_iso_weight", 0 <= self.waviness_iso_weight < 1, "[0, 1)"),
-            ("damping_points", self.damping_points >= 1, "≥ 1"),
+            ("waviness_points", 1 <= self.waviness_points <= 50, "1–50"),
+            ("damping_points", 1 <= self.damping_points <= 50, "1–50"),
+            ("grid_step_kpa", 1.0 <= self.grid_step_kpa <= 25.0, "1–25 kPa"),
             ("hop_margin", self.hop_margin > 0, "> 0"),
-            ("speed_bin_ratio", 1 < self.speed_bin_ratio <= 1.5, "(1, 1.5]"),
             ("max_speed_change", self.max_speed_change > 0, "> 0"),
             ("max_accel_mps2", self.max_accel_mps2 > 0, "> 0"),
             ("spike_z", self.spike_z > 3, "> 3"),
@@ -337,160 +349,79 @@ class MonitorUpdate:
         })  # fmt: skip
 
 
-@cached_njit
-def _corner_terms(lam, beta, p_kpa, table, log_gain, dlog_gain, p_lo, p_step, proj, weight, x, log_cv):
-    """Whittle log-likelihood, score and Fisher information per (corner, damping) in (λ_c, β, p).
+@cached_njit(fastmath={"reassoc", "contract", "arcp"})
+def _window_loglik(proj, weight, lo, hi, base, gain, slot, lam_lo, lam_hi, out_ll, out_lam):
+    r"""One window's Whittle log-likelihood with its road level integrated out, on the parameter grid.
 
-    `lam`, `beta` (C,): each row's log level and slope; `table` (C, B): which gain table (slot) row c
-    uses in bin b (rows may be memories × corners; a slot is a corner at a suspension rate).
-    r = exp(λ_c + β_c x + log_cv + log g(p));
-    ℓ = −Σ w [log(1 + r) + P/(1 + r)];
-    ∂ℓ/∂θ = Σ w q (P/(1+r) − 1) ∂log r/∂θ, I = Σ w q² (∂log r)(∂log r)ᵀ, q = r/(1 + r).
-    `log_gain` (S, D, P, F): log(|h|²/N) on the pressure grid p_lo + i·p_step (kPa), linearly
-    interpolated; `dlog_gain` its derivative per kPa; `proj` (C, D, B, F); `weight` (C, B, F);
-    `x`, (B, F) log(n/n0); `log_cv` (B,) log(4π² n0² v)."""
-    n_c, n_d = p_kpa.shape
-    n_b, n_f = x.shape
-    n_p = log_gain.shape[2]
-    ll = np.zeros((n_c, n_d))
-    score = np.zeros((n_c, n_d, 3))
-    info = np.zeros((n_c, n_d, 3, 3))
+    For each corner c (gain-table slot ``slot[c]``, skipped where −1), damping d, slope b and
+    pressure g: r_f = e^λ base[b, f] gain[slot, d, g, f] (the signal-to-noise ratio along the
+    signal direction), :math:`\ell(\lambda) = -\sum_f w_f[\log(1 + r_f) + P_f/(1 + r_f)]`,
+    maximized over the window's log level λ = log Gd(n0) within [lam_lo, lam_hi] by Fisher scoring
+    (score U = :math:`\sum w q (P/(1+r) - 1)`, information :math:`I = \sum w q^2`, q = r/(1 + r));
+    out_ll = ℓ(λ̂) − ½ log I(λ̂) (Laplace's integral over λ with a flat prior, up to a constant
+    common to the whole grid), out_lam = λ̂. Each pressure starts from its neighbours' λ̂
+    extrapolated along the grid; once a step δ is below 0.02 it is the last, and ℓ and log I are
+    carried to its end to second order (ℓ + Uδ − Iδ²/2; dlog I/dλ = 2Σwq²(1 − q)/I): one pass
+    over the band per grid point where the start is good.
+
+    `proj` (C, D, F): u^H S u / N of the window (dimensionless); `weight` (F,): Fourier
+    frequencies per band, nonzero only within [lo, hi); `base` (B, F): exp(β_b log(n/n0) +
+    log(4π² n0² v)); `gain` (S, D, G, F): |h|²/N on the pressure grid; outputs (C, D, B, G).
+    The same sums as :func:`suvtwin.estimators.joint.profile_loglik` (tested against it), compiled
+    and warm-started for the grid."""
+    n_c, n_d = proj.shape[0], proj.shape[1]
+    n_b, n_g = base.shape[0], gain.shape[2]
     for c in range(n_c):
+        s = slot[c]
+        if s < 0:
+            continue
         for d in range(n_d):
-            pos = (p_kpa[c, d] - p_lo) / p_step
-            i = min(max(int(np.floor(pos)), 0), n_p - 2)
-            a = min(max(pos - i, 0.0), 1.0)
-            s0 = s1 = s2 = 0.0
-            i00 = i01 = i02 = i11 = i12 = i22 = 0.0
-            acc = 0.0
+            excess = 0.0
+            for f in range(lo, hi):
+                excess += weight[f] * max(proj[c, d, f] - 1.0, 0.0)
             for b in range(n_b):
-                g = table[c, b]
-                for j in range(n_f):
-                    wf = weight[c, b, j]
-                    if wf == 0.0:
-                        continue
-                    lg = (1.0 - a) * log_gain[g, d, i, j] + a * log_gain[g, d, i + 1, j]
-                    dl = (1.0 - a) * dlog_gain[g, d, i, j] + a * dlog_gain[g, d, i + 1, j]
-                    xf = x[b, j]
-                    r = np.exp(lam[c] + beta[c] * xf + log_cv[b] + lg)
-                    inv = 1.0 / (1.0 + r)
-                    q = r * inv
-                    pw = proj[c, d, b, j]
-                    acc -= wf * (np.log1p(r) + pw * inv)
-                    e = wf * q * (pw * inv - 1.0)
-                    s0 += e
-                    s1 += e * xf
-                    s2 += e * dl
-                    wq = wf * q * q
-                    i00 += wq
-                    i01 += wq * xf
-                    i02 += wq * dl
-                    i11 += wq * xf * xf
-                    i12 += wq * xf * dl
-                    i22 += wq * dl * dl
-            ll[c, d] = acc
-            score[c, d, 0], score[c, d, 1], score[c, d, 2] = s0, s1, s2
-            info[c, d, 0, 0], info[c, d, 0, 1], info[c, d, 0, 2] = i00, i01, i02
-            info[c, d, 1, 0], info[c, d, 1, 1], info[c, d, 1, 2] = i01, i11, i12
-            info[c, d, 2, 0], info[c, d, 2, 1], info[c, d, 2, 2] = i02, i12, i22
-    return ll, score, info
+                lam1 = lam2 = 0.0
+                for g in range(n_g):
+                    if g >= 2:
+                        lam = 2.0 * lam1 - lam2
+                    elif g == 1:
+                        lam = lam1
+                    else:  # method of moments
+                        total = 0.0
+                        for f in range(lo, hi):
+                            total += weight[f] * base[b, f] * gain[s, d, g, f]
+                        lam = math.log(max(excess, 1e-12) / max(total, 1e-300))
+                    lam = min(max(lam, lam_lo), lam_hi)
+                    ll = info = slope = 0.0
+                    for _ in range(50):
+                        level = math.exp(lam)
+                        ll = score = info = slope = 0.0
+                        for f in range(lo, hi):
+                            r = level * base[b, f] * gain[s, d, g, f]
+                            inv = 1.0 / (1.0 + r)
+                            q = r * inv
+                            wf = weight[f]
+                            pw = proj[c, d, f]
+                            ll -= wf * (math.log1p(r) + pw * inv)
+                            score += wf * q * (pw * inv - 1.0)
+                            wq2 = wf * q * q
+                            info += wq2
+                            slope += wq2 * (1.0 - q)
+                        info = max(info, 1e-300)
+                        new = min(max(lam + min(max(score / info, -2.0), 2.0), lam_lo), lam_hi)
+                        step = new - lam
+                        lam = new
+                        if abs(step) < 0.02:
+                            # the last step's gain and the information there, to second order
+                            ll += score * step - 0.5 * info * step * step
+                            info *= math.exp(2.0 * step * slope / info)
+                            break
+                    out_ll[c, d, b, g] = ll - 0.5 * math.log(max(info, 1e-300))
+                    out_lam[c, d, b, g] = lam
+                    lam2, lam1 = lam1, lam
 
 
-@cached_njit
-def _newton_kernel(
-    variant,
-    lam,
-    beta,
-    p,
-    table,
-    log_gain,
-    dlog_gain,
-    grid_lo,
-    grid_step,
-    proj,
-    weight,
-    x,
-    log_cv,
-    prior,
-    prior_var,
-    p_lo,
-    p_hi,
-    lam_lo,
-    lam_hi,
-    b_lo,
-    b_hi,
-    iterations,
-):
-    """Block Fisher scoring of one memory's likelihood, each corner on its own.
-
-    Parameters per corner: log level λ_c and slope β_c (β_c only if `variant` is 1, else kept),
-    and per (corner, damping) the pressure p with a Gaussian prior (`prior` (C,), `prior_var`,
-    kPa). Each pressure takes its conditional step given (λ_c, β_c); then (λ_c, β_c) take the
-    Newton step of their profile likelihood (the pressures' information Schur-complemented out,
-    damping-weighted). Steps are clipped (30 kPa, 2 in λ, 0.5 in β) and kept in their ranges; at
-    most `iterations` steps, fewer once below 1e-3 (0.1 kPa, 0.001 in λ and β). `lam`, `beta` (C,)
-    and `p` (C, D) are updated in place. Returns the damping weights (C, D) (Laplace marginal over
-    p), and ℓ (C, D), score (C, D, 3), information (C, D, 3, 3) at the last point, the pressure
-    prior included."""
-    n_c, n_d = p.shape
-    wd = np.empty((n_c, n_d))
-    it = 0
-    while True:
-        ll, score, info = _corner_terms(
-            lam, beta, p, table, log_gain, dlog_gain, grid_lo, grid_step, proj, weight, x, log_cv
-        )
-        for c in range(n_c):
-            top = -1e300
-            for d in range(n_d):
-                dev = p[c, d] - prior[c]
-                score[c, d, 2] -= dev / prior_var
-                info[c, d, 2, 2] += 1.0 / prior_var
-                wd[c, d] = ll[c, d] - 0.5 * dev * dev / prior_var - 0.5 * np.log(info[c, d, 2, 2])
-                top = max(top, wd[c, d])
-            total = 0.0
-            for d in range(n_d):
-                wd[c, d] = np.exp(wd[c, d] - top)
-                total += wd[c, d]
-            for d in range(n_d):
-                wd[c, d] /= total
-        if it >= iterations:
-            break
-        moved = 0.0
-        for c in range(n_c):
-            a = b = e = g = h = 0.0
-            for d in range(n_d):
-                ipp = info[c, d, 2, 2]
-                w = wd[c, d]
-                sp = score[c, d, 2] / ipp
-                a += w * (info[c, d, 0, 0] - info[c, d, 0, 2] ** 2 / ipp)
-                b += w * (info[c, d, 0, 1] - info[c, d, 0, 2] * info[c, d, 1, 2] / ipp)
-                e += w * (info[c, d, 1, 1] - info[c, d, 1, 2] ** 2 / ipp)
-                g += w * (score[c, d, 0] - info[c, d, 0, 2] * sp)
-                h += w * (score[c, d, 1] - info[c, d, 1, 2] * sp)
-                new = min(max(p[c, d] + min(max(sp, -30.0), 30.0), p_lo), p_hi)
-                moved = max(moved, abs(new - p[c, d]) * 1e-2)
-                p[c, d] = new
-            a += 1e-9
-            e += 1e-9
-            if variant == 1:
-                det = a * e - b * b
-                d_lam = (e * g - b * h) / det
-                d_beta = (a * h - b * g) / det
-                new_b = min(max(beta[c] + min(max(d_beta, -0.5), 0.5), b_lo), b_hi)
-                moved = max(moved, abs(new_b - beta[c]))
-                beta[c] = new_b
-            else:
-                d_lam = g / a
-            new_l = min(max(lam[c] + min(max(d_lam, -2.0), 2.0), lam_lo), lam_hi)
-            moved = max(moved, abs(new_l - lam[c]))
-            lam[c] = new_l
-        it += 1
-        if moved < 1e-3:
-            iterations = it  # evaluate once more at the converged point
-    return wd, ll, score, info
-
-
-def _logsumexp(a: np.ndarray, axis: int) -> np.ndarray:
+def _logsumexp(a: np.ndarray, axis) -> np.ndarray:
     m = np.max(a, axis=axis, keepdims=True)
     m = np.where(np.isfinite(m), m, 0.0)
     return np.squeeze(m, axis=axis) + np.log(np.sum(np.exp(a - m), axis=axis))
@@ -498,48 +429,38 @@ def _logsumexp(a: np.ndarray, axis: int) -> np.ndarray:
 
 @dataclass
 class _Fit:
-    """One memory's estimate. Variants: 0 the ISO slope w = 2, 1 the slope free (spike and slab)."""
+    """Every memory's posterior (M memories, C corners), from :meth:`TyreMonitor._posteriors`."""
 
-    lam: np.ndarray  # (V, C) each corner's log level, log m³
-    beta: np.ndarray  # (V, C) each corner's slope β = 2 − w
-    p: np.ndarray  # (V, C, D) kPa
-    wd: np.ndarray  # (V, C, D) damping weights
-    variant_weight: np.ndarray  # (C, V)
-    p_mean: np.ndarray  # (C,) kPa
-    p_var: np.ndarray  # (C,) kPa²
-    lam_mean: np.ndarray  # (C,)
-    lam_var: np.ndarray  # (C,)
-    beta_mean: np.ndarray  # (C,)
-    beta_var: np.ndarray  # (C,)
-    has_data: bool
+    log_post: np.ndarray  # (M, C, D, B, P) normalized log posterior on dampings × slopes × the 1 kPa grid
+    p_mean: np.ndarray  # (M, C) kPa
+    p_var: np.ndarray  # (M, C) kPa²
+    w_mean: np.ndarray  # (M, C) waviness
+    w_var: np.ndarray  # (M, C)
+    mode: np.ndarray  # (M, C, 2) int: the likeliest (damping, slope)
+    has_data: np.ndarray  # (M, C) bool
 
 
 @dataclass
 class _State:
     """Everything the monitor remembers: bounded, fixed-size arrays."""
 
-    spec: np.ndarray  # (M, C, NB, F, 3) complex: Σ w_k S_k of S11, S22, S12 (one-sided, per Hz) / scale
-    weight: np.ndarray  # (M, C, NB): Σ w_k / scale
-    weight2: np.ndarray  # (M, C, NB): Σ w_k² / scale²
-    speed_sum: np.ndarray  # (M, C, NB): Σ w_k v_k / scale
-    scale: np.ndarray  # (M,): the forgetting factor accumulated since the last renormalization
+    loglik: np.ndarray  # (M, C, D, B, G): Σ ρ_k w_k ℓ_k of the used windows on the coarse grid, nats
+    weight: np.ndarray  # (M, C): Σ ρ_k w_k
+    weight2: np.ndarray  # (M, C): Σ ρ_k² w_k² / share
     score: np.ndarray  # (C, M): forgotten sum of predictive scores
-    fits: list  # M × _Fit or None
+    fit: _Fit | None
     buffer_t: np.ndarray  # the last window's samples, then those not yet in a window
     buffer_v: np.ndarray
     buffer_s: np.ndarray
     buffer_u: np.ndarray
     blocks: np.ndarray  # (segment/update, C) status of the window's update blocks, newest last
-    recent_spec: np.ndarray  # (K, C, F, 3) the last K windows' weighted cross-periodograms, newest last
+    recent_ll: np.ndarray  # (K, C, D, B, G) the last K windows' w_k ℓ_k, newest last
     recent_weight: np.ndarray  # (K, C) their weights (0: not used)
-    recent_speed: np.ndarray  # (K,) their speeds, m/s
     recent_t: np.ndarray  # (K,) their end times, s
-    recent_u: np.ndarray  # (K, C) each window's score in p (1/kPa) at the longest memory's estimate then
-    recent_i: np.ndarray  # (K, C) its information in p (1/kPa²)
-    recent_p: np.ndarray  # (K, C) the pressure it was taken at, kPa
     in_window: int = 0  # samples at the buffer's start that belong to the last window
     last_t: float = math.nan  # time of the last sample received
     last_segment_t: float = math.nan  # time of the last finished segment
+    level: float = math.nan  # the newest window's road level, m³
     counts: dict = field(default_factory=dict)
 
 
@@ -613,14 +534,28 @@ class TyreMonitor:
         if self.freq.size < 4:
             raise InputError("the frequency band holds fewer than 4 Fourier frequencies; lengthen segment_s")
         self.noise = 2.0 * cfg.sigma_accel**2 * dt  # one-sided white-noise PSD, (m/s²)²/Hz
-        # speed bins: geometric from 1 m/s to 100 m/s
-        self._v_lo = 1.0
-        self._log_ratio = math.log(cfg.speed_bin_ratio)
-        self.n_bins = int(math.ceil(math.log(100.0 / self._v_lo) / self._log_ratio)) + 1
-        # pressure grid (kPa) for the gain tables; dampings per corner
+        # the pressure grids (kPa): coarse for the windows' likelihoods, 1 kPa for the posteriors
         p_lo, p_hi = cfg.pressure_range_kpa
-        self._p_step = 1.0
-        self._p_grid = np.arange(p_lo, p_hi + 0.5, self._p_step)
+        n_coarse = max(int(math.ceil((p_hi - p_lo) / cfg.grid_step_kpa - 1e-9)) + 1, 4)
+        self._p_coarse = np.linspace(p_lo, p_hi, n_coarse)
+        self._p_grid = np.linspace(p_lo, p_hi, int(round(p_hi - p_lo)) + 1)
+        # a cubic spline through the coarse grid, as a matrix (fine, coarse): linear in the values
+        self._to_fine = CubicSpline(self._p_coarse, np.eye(n_coarse))(self._p_grid)
+        # waviness grid: w = 2 (the spike) and the slab's points, with their prior log weights
+        w_lo, w_hi = cfg.waviness_range
+        slab = np.linspace(w_lo, w_hi, cfg.waviness_points) if w_hi > w_lo else np.empty(0)
+        iso = cfg.waviness_iso_weight if slab.size else 1.0
+        self.waviness_grid = np.concatenate([[2.0], slab]) if iso > 0 else slab
+        slab_weight = math.log1p(-iso) - math.log(slab.size) if slab.size else 0.0
+        spike = [math.log(iso)] if iso > 0 else []
+        self._w_logprior = np.concatenate([spike, np.full(slab.size, slab_weight)])
+        # the prior on p on the fine grid: Gaussian, cut to the range
+        self._prior = np.array(
+            [t.p0 / 1e3 if cfg.prior_pressure_kpa is None else cfg.prior_pressure_kpa for t in self.tires]
+        )
+        self._prior_var = cfg.prior_sigma_kpa**2
+        log_prior = -0.5 * (self._p_grid[None, :] - self._prior[:, None]) ** 2 / self._prior_var
+        self._log_prior = log_prior - _logsumexp(log_prior, axis=1)[:, None]  # (C, P)
         n_d = cfg.damping_points
         self._fine = fine
         self._hop_hz = np.empty(n_c)
@@ -641,8 +576,7 @@ class TyreMonitor:
         self._slot_of: dict[tuple[int, int], int] = {}
         self._slot_used = np.zeros(0, dtype=np.int64)
         self._n_updates = 0
-        shape = (n_c, n_d, self._p_grid.size, self.freq.size)
-        self._log_gain, self._dlog_gain = np.empty(shape), np.empty(shape)
+        self._gain = np.empty((n_c, n_d, self._p_coarse.size, self.freq.size))
         self._u11 = np.empty((n_c, n_d, 1, self.freq.size))
         self._u22 = np.empty_like(self._u11)
         self._u12 = np.empty(self._u11.shape, dtype=complex)
@@ -662,14 +596,9 @@ class TyreMonitor:
             for f, r in self.tracks
         ]  # fmt: skip
         self._laws = np.array([[t.kt0, t.p0, t.pfz1] for t in self.tires]).T  # (3, C): eq. 3–4 per corner
-        self._prior = np.array(
-            [t.p0 / 1e3 if cfg.prior_pressure_kpa is None else cfg.prior_pressure_kpa for t in self.tires]
-        )
-        self._prior_var = cfg.prior_sigma_kpa**2
         self._n_recent = int(math.ceil(cfg.change_window_s / cfg.update_s))
-        w_lo, w_hi = cfg.waviness_range
-        self._beta_bounds = (2.0 - w_hi, 2.0 - w_lo)
-        self._slope_free = self._beta_bounds[1] > self._beta_bounds[0]
+        # the sandwich factor's ceiling per memory: 1 + e^(−update/τ), its value under steady data
+        self._kappa_max = 1.0 + np.exp(-cfg.update_s / np.asarray(cfg.memories_s, dtype=float))
         self.reset()
 
     # ------------------------------------------------------------------ gain tables
@@ -677,22 +606,20 @@ class TyreMonitor:
         """Gain tables of corner c with its suspension rate times (1 + rate_step)^step and its tyre's
         stiffness and damping times the contact share (1 + rate_step)^−lift, in `slot`.
 
-        log(|h|²/N) per damping, pressure and band (the band's mean gain), its derivative in p,
-        and the signal direction's terms u^H S u = |u1|² S11 + |u2|² S22 + 2 Re(conj(u1) u2 S12)."""
+        |h|²/N per damping, coarse-grid pressure and band (the band's mean gain), and the signal
+        direction's terms u^H S u = |u1|² S11 + |u2|² S22 + 2 Re(conj(u1) u2 S12)."""
         qc = self.models[c]
         rate = qc.spring_rate * (1.0 + self.config.rate_step) ** step
         contact = (1.0 + self.config.rate_step) ** -lift
-        kt = contact * stiffness_from_pressure(self._p_grid * 1e3, **asdict(self.tires[c]))
+        kt = contact * stiffness_from_pressure(self._p_coarse * 1e3, **asdict(self.tires[c]))
         for d, cd in enumerate(self.dampings[c]):
             model = replace(qc, damping=float(cd), spring_rate=rate, tire_damping=contact * qc.tire_damping)
             g = signal_gain(self._fine[None, :], kt[:, None], model) / self.noise
-            g = np.add.reduceat(g, self._group_start, axis=1) / self._group_size
-            self._log_gain[slot, d] = np.log(np.maximum(g, 1e-300))
+            self._gain[slot, d] = np.add.reduceat(g, self._group_start, axis=1) / self._group_size
             u1, u2 = signal_direction(self.freq, model)
             self._u11[slot, d, 0] = np.abs(u1) ** 2 / self.noise
             self._u22[slot, d, 0] = np.abs(u2) ** 2 / self.noise
             self._u12[slot, d, 0] = 2.0 * np.conj(u1) * u2 / self.noise
-        self._dlog_gain[slot] = np.gradient(self._log_gain[slot], self._p_step, axis=1)
 
     def _slot(self, c: int, step: int, lift: int = 0) -> int:
         """Index of the gain tables of corner c at rate step `step` and contact step `lift`, made (or
@@ -705,8 +632,8 @@ class TyreMonitor:
             if n < self.config.table_slots or idle.size == 0:
                 slot = n  # grow
                 grow = lambda a: np.concatenate([a, np.empty((1,) + a.shape[1:], a.dtype)])  # noqa: E731
-                if n >= self._log_gain.shape[0]:
-                    self._log_gain, self._dlog_gain = grow(self._log_gain), grow(self._dlog_gain)
+                if n >= self._gain.shape[0]:
+                    self._gain = grow(self._gain)
                     self._u11, self._u22, self._u12 = grow(self._u11), grow(self._u22), grow(self._u12)
                 self._slot_used = np.append(self._slot_used, self._n_updates)
             else:
@@ -771,56 +698,38 @@ class TyreMonitor:
         for track in getattr(self, "_previews", []):
             track.reset()
         n_m, n_c = len(self.config.memories_s), len(self.models)
-        shape = (n_m, n_c, self.n_bins)
+        grid = (self.config.damping_points, self.waviness_grid.size, self._p_coarse.size)
         self._state = _State(
-            spec=np.zeros(shape + (self.freq.size, 3), dtype=complex),
-            weight=np.zeros(shape),
-            weight2=np.zeros(shape),
-            speed_sum=np.zeros(shape),
-            scale=np.ones(n_m),
+            loglik=np.zeros((n_m, n_c) + grid),
+            weight=np.zeros((n_m, n_c)),
+            weight2=np.zeros((n_m, n_c)),
             score=np.zeros((n_c, n_m)),
-            fits=[None] * n_m,
+            fit=None,
             buffer_t=np.empty(0),
             buffer_v=np.empty(0),
             buffer_s=np.empty((0, n_c)),
             buffer_u=np.empty((0, n_c)),
             blocks=np.full((self.window // self.hop, n_c), _GAP, dtype=np.int8),
-            recent_spec=np.zeros((self._n_recent, n_c, self.freq.size, 3), dtype=complex),
+            recent_ll=np.zeros((self._n_recent, n_c) + grid),
             recent_weight=np.zeros((self._n_recent, n_c)),
-            recent_speed=np.full(self._n_recent, np.nan),
             recent_t=np.full(self._n_recent, np.nan),
-            recent_u=np.zeros((self._n_recent, n_c)),
-            recent_i=np.zeros((self._n_recent, n_c)),
-            recent_p=np.zeros((self._n_recent, n_c)),
             counts={
                 "segments": 0, **{r: np.zeros(n_c, dtype=int) for r in SKIP_REASONS},
                 "restarts": np.zeros(n_c, dtype=int),
                 "despiked": np.zeros(n_c, dtype=int),
             },
         )  # fmt: skip
+        self._state.fit = self._posteriors()
 
     @property
     def state_nbytes(self) -> int:
-        """Size of the state the monitor carries between updates, bytes (bounded)."""
+        """Size of the state the monitor carries between updates, bytes (bounded; the posteriors are
+        recomputed from it at every update and not counted)."""
         s = self._state
         arrays = [
-            s.spec,
-            s.weight,
-            s.weight2,
-            s.speed_sum,
-            s.score,
-            s.buffer_t,
-            s.buffer_v,
-            s.buffer_s,
-            s.buffer_u,
-            s.recent_spec,
-            s.recent_weight,
-            s.recent_speed,
-            s.recent_t,
-            s.recent_u,
-            s.recent_i,
-            s.recent_p,
-        ]
+            s.loglik, s.weight, s.weight2, s.score, s.buffer_t, s.buffer_v, s.buffer_s, s.buffer_u,
+            s.blocks, s.recent_ll, s.recent_weight, s.recent_t,
+        ]  # fmt: skip
         return int(sum(a.nbytes for a in arrays)) + sum(t.state_nbytes for t in self._previews)
 
     @property
@@ -958,7 +867,7 @@ class TyreMonitor:
         """One update: check the new block, then use the window (the last `segment_s`) if it is sound."""
         cfg = self.config
         s = self._state
-        n_c, n_m = len(self.models), len(cfg.memories_s)
+        n_c = len(self.models)
         t, v, a_s, a_u = window
         s.blocks = np.roll(s.blocks, -1, axis=0)
         s.blocks[-1] = self._check_block(block[1], block[2], block[3])
@@ -993,21 +902,22 @@ class TyreMonitor:
         self._feed_previews(block, s.blocks[-1], elapsed)
         restarts = np.zeros(n_c, dtype=int)
         analysed_rate, analysed_touch = np.full(n_c, np.nan), np.full(n_c, np.nan)
+        s.level = math.nan
+        self._forget(elapsed)  # time passes: the memories fade, with or without new data
+        s.score *= math.exp(-elapsed / cfg.selection_s)
         if np.any(used):
             share = self.hop / self.window  # each sample is in window/hop windows
             # weights: a window of fewer samples (while the first fills, or the part after a gap) is
             # zero-padded and counts for the share of a window it holds
             w_c = share * np.minimum(tail, t.size) / self.window
             whole = used & (tail == t.size)
-            spec = np.empty((int(used.sum()), self.freq.size, 3), dtype=complex)
+            spec = np.zeros((n_c, 1, self.freq.size, 3), dtype=complex)
             if np.any(whole):
-                spec[whole[used]] = self._cross_spectra(a_s[:, whole], a_u[:, whole])
-            for i, c in enumerate(np.flatnonzero(used)):
-                if not whole[c]:
-                    spec[i] = self._cross_spectra(a_s[-tail[c] :, c : c + 1], a_u[-tail[c] :, c : c + 1])[0]
-            b = self._speed_bin(speed)
+                spec[whole, 0] = self._cross_spectra(a_s[:, whole], a_u[:, whole])
+            for c in np.flatnonzero(used & ~whole):
+                spec[c, 0] = self._cross_spectra(a_s[-tail[c] :, c : c + 1], a_u[-tail[c] :, c : c + 1])[0]
             table = np.arange(n_c)[:, None]  # each corner's gain tables at this window's travel
-            table[used, 0], rough, rate_c, touch_c = self._tables_for(np.flatnonzero(used), spec)
+            table[used, 0], rough, rate_c, touch_c = self._tables_for(np.flatnonzero(used), spec[used, 0])
             analysed_rate[used], analysed_touch[used] = rate_c, touch_c
             rough_c = np.zeros(n_c, dtype=bool)
             rough_c[used] = rough > cfg.max_nonlinear_share
@@ -1015,38 +925,28 @@ class TyreMonitor:
                 status[rough_c] = _ROUGH
                 s.counts["used"][rough_c] -= 1
                 s.counts["rough"][rough_c] += 1
-                spec = spec[~rough_c[used]]
                 used = used & ~rough_c
                 whole = whole & used
-                table[~used, 0] = np.arange(n_c)[~used]
-            # 1. predictive scores of the memories for the new block (before it is added; whole
+        if np.any(used):
+            w_c = np.where(used, w_c, 0.0)
+            ll, lam = self._window_grid(spec, used, speed, table)
+            # 1. predictive scores of the memories for the new block, before it is added (whole
             # windows only: a block with a gap predicts nothing)
-            scores = np.zeros((n_c, n_m))
             if np.any(whole):
-                newest = self._cross_spectra(block[2][:, whole], block[3][:, whole], own_grid=True)
-                scores = self._predictive_scores(newest, whole, speed, share, table)  # (C, M), 0 where unused
-            decay = math.exp(-elapsed / cfg.selection_s)
-            s.score = decay * s.score + scores
-            # 2. forget (lazily: the stored sums are divided by the accumulated factor) and add
-            self._forget(elapsed)
-            w = w_c[used]
-            for m in range(n_m):
-                k = s.scale[m]
-                s.spec[m][used, b] += w[:, None, None] * spec / k
-                s.weight[m][used, b] += w / k
-                s.weight2[m][used, b] += w * w / share / k**2  # overlapping windows: blocks of weight w/share
-                s.speed_sum[m][used, b] += w * speed / k
+                newest = np.zeros_like(spec)
+                newest[whole, 0] = self._cross_spectra(block[2][:, whole], block[3][:, whole], own_grid=True)
+                ll_block, _ = self._window_grid(newest, whole, speed, table)
+                s.score += self._predictive_scores(share * ll_block, whole)
+            # 2. add the window to every memory
+            ll *= w_c[:, None, None, None]
+            s.loglik[:, used] += ll[used]
+            s.weight[:, used] += w_c[used]
+            s.weight2[:, used] += w_c[used] ** 2 / share  # overlapping windows: blocks of weight w/share
             # 3. change test: keep the window, look for a pressure change within the recent ones
-            s.recent_spec = np.roll(s.recent_spec, -1, axis=0)
+            s.recent_ll = np.roll(s.recent_ll, -1, axis=0)
             s.recent_weight = np.roll(s.recent_weight, -1, axis=0)
-            s.recent_speed, s.recent_t = np.roll(s.recent_speed, -1), np.roll(s.recent_t, -1)
-            s.recent_u, s.recent_i = np.roll(s.recent_u, -1, axis=0), np.roll(s.recent_i, -1, axis=0)
-            s.recent_p = np.roll(s.recent_p, -1, axis=0)
-            s.recent_spec[-1] = 0.0
-            s.recent_spec[-1, used] = w[:, None, None] * spec
-            s.recent_weight[-1] = np.where(used, w_c, 0.0)
-            s.recent_speed[-1], s.recent_t[-1] = speed, t_end
-            s.recent_u[-1], s.recent_i[-1], s.recent_p[-1] = self._window_score(spec, used, speed, w_c, table)
+            s.recent_t = np.roll(s.recent_t, -1)
+            s.recent_ll[-1], s.recent_weight[-1], s.recent_t[-1] = ll, w_c, t_end
             start = self._change_test(used)
             for c in np.flatnonzero(start >= 0):
                 self._rebuild(c, int(start[c]), t_end)
@@ -1055,9 +955,8 @@ class TyreMonitor:
             for track, (f, r) in zip(self._previews, self.tracks, strict=True):
                 if restarts[f] or restarts[r]:
                     track.reset()  # its ratio changed: start it afresh
-        else:
-            self._forget(elapsed)  # time passes: memories fade
-        s.fits = self._fit_all(s.fits)
+            s.level = self._window_level(lam, used)
+        s.fit = self._posteriors()
         self._n_updates += 1
         return self._output(t_end, speed, status, restarts, analysed_rate, analysed_touch)
 
@@ -1073,112 +972,137 @@ class TyreMonitor:
             pick = (lambda x, c: x[:, c]) if ok else (lambda x, c: np.full(x.shape[0], np.nan))  # noqa: E731
             track.add(pick(a_u, f), pick(a_u, r), v, acc_s_front=pick(a_s, f), acc_s_rear=pick(a_s, r))
 
-    def _speed_bin(self, speed: float) -> int:
-        """Index of the accumulators' speed bin nearest `speed` (m/s), geometric bins."""
-        b = math.floor(math.log(speed / self._v_lo) / self._log_ratio + 0.5)
-        return int(np.clip(b, 0, self.n_bins - 1))
+    def _window_grid(self, spec: np.ndarray, used: np.ndarray, speed: float, table: np.ndarray):
+        """Log-likelihood (level integrated out) and the level's estimate of one window's spectra
+        `spec` (C, 1, F, 3) on the grid, for the corners `used` with gain-table slots `table` (C, 1):
+        two (C, D, B, G) arrays (zero for the other corners); :func:`_window_loglik`."""
+        n_c = len(self.models)
+        proj = np.ascontiguousarray(self._project(spec, table)[:, :, 0])  # (C, D, F)
+        weight, x, log_cv = self._band(np.array([speed]))
+        weight = np.ascontiguousarray(weight[0])
+        inside = np.flatnonzero(weight > 0)
+        beta = 2.0 - self.waviness_grid
+        base = np.exp(beta[:, None] * x[0][None, :] + log_cv[0])
+        shape = (n_c, self.config.damping_points, beta.size, self._p_coarse.size)
+        ll, lam = np.zeros(shape), np.zeros(shape)
+        if inside.size == 0:
+            return ll, lam
+        slot = np.where(used, table[:, 0], -1).astype(np.int64)
+        _window_loglik(proj, weight, int(inside[0]), int(inside[-1]) + 1, base, self._gain, slot,
+                       *_LEVEL_BOUNDS, ll, lam)  # fmt: skip
+        return ll, lam
+
+    def _window_level(self, lam: np.ndarray, used: np.ndarray) -> float:
+        """The window's road level Gd(n0), m³: each used corner's λ̂ at the likeliest memory's
+        (damping, slope) mode and the grid pressure nearest its estimate, averaged over the
+        corners in log."""
+        fit = self._state.fit
+        m = int(np.argmax(self._memory_weights().mean(axis=0)))
+        values = []
+        for c in np.flatnonzero(used):
+            d, b = fit.mode[m, c]
+            g = int(np.argmin(np.abs(self._p_coarse - fit.p_mean[m, c])))
+            values.append(lam[c, d, b, g])
+        return math.exp(float(np.mean(values)))
 
     def _change_test(self, used: np.ndarray) -> np.ndarray:
         """Per corner, the index into the recent windows where a pressure change starts, or −1.
 
         Generalized likelihood ratio of a step in p [4]_: for each start j among the recent
-        windows, the score U_j and information I_j in p of the windows from j on, at the longest
-        memory's estimate, give GLR_j = U_j²/(2 I_j); a change is declared where max_j GLR_j
-        exceeds ``change_nats`` (with at least two windows from j on). The road's level is held at
-        the memory's, not profiled: profiled, it would absorb most of a pressure step (the
-        level–k_t ridge); held, the test also fires when the road's roughness changes, which
-        makes the old windows as misleading as a pressure change does."""
+        windows, the windows from j on (their log-likelihoods, each with its own road level
+        integrated out, at the longest memory's likeliest damping and slope) are summed; GLR_j is
+        their maximum over p less their value at the longest memory's estimate. A change is
+        declared where max_j GLR_j exceeds ``change_nats`` (with at least two windows from j on).
+        Each window has its own road level, so a change of road roughness is not taken for one of
+        pressure."""
         s = self._state
         n_c = len(self.models)
         out = np.full(n_c, -1)
-        fit = s.fits[-1]
-        if fit is None or not fit.has_data or not np.any(used):
-            return out
-        pick = np.arange(n_c)
-        # each window's score moved to the memory's present estimate (the score is linear in p near it)
-        p_now = fit.p_mean[None, :]
-        u = np.where(s.recent_i > 0, s.recent_u - s.recent_i * (p_now - s.recent_p), 0.0)
-        info = s.recent_i
-        total_u = np.cumsum(u[::-1], axis=0)[::-1]  # from window j to the newest
-        total_i = np.cumsum(info[::-1], axis=0)[::-1]
-        n_after = np.cumsum(info[::-1] > 0, axis=0)[::-1]
-        glr = np.where((total_i > 0) & (n_after >= 2), total_u**2 / (2.0 * np.maximum(total_i, 1e-300)), 0.0)
-        best = np.argmax(glr, axis=0)
-        hit = (glr[best, pick] > self.config.change_nats) & used
-        out[hit] = best[hit]
+        fit = s.fit
+        for c in np.flatnonzero(used & fit.has_data[-1]):
+            d, b = fit.mode[-1, c]
+            recent = s.recent_ll[:, c, d, b]  # (K, G)
+            after = np.cumsum(s.recent_weight[::-1, c] > 0)[::-1]  # used windows from j on
+            total = np.cumsum(recent[::-1], axis=0)[::-1] @ self._to_fine.T  # (K, P)
+            at = np.array([np.interp(fit.p_mean[-1, c], self._p_grid, row) for row in total])
+            glr = np.where(after >= 2, total.max(axis=1) - at, 0.0)
+            j = int(np.argmax(glr))
+            if glr[j] > self.config.change_nats:
+                out[c] = j
         return out
-
-    def _terms_at(self, fit: _Fit, table, proj, weight, x, log_cv):
-        """:func:`_corner_terms` at a memory's estimate, each corner with its likelier slope model;
-        also that model's damping weights (C, D)."""
-        n_c = len(self.models)
-        v = np.argmax(fit.variant_weight, axis=1)
-        pick = np.arange(n_c)
-        lam = np.ascontiguousarray(fit.lam[v, pick])
-        lam = np.where(np.isfinite(lam), lam, math.log(1e-5))
-        ll, score, info = _corner_terms(
-            lam, np.ascontiguousarray(fit.beta[v, pick]), np.ascontiguousarray(fit.p[v, pick]), table,
-            self._log_gain, self._dlog_gain, float(self._p_grid[0]), self._p_step, proj, weight, x, log_cv,
-        )  # fmt: skip
-        return ll, score, info, fit.wd[v, pick]
-
-    def _window_score(self, spec: np.ndarray, used: np.ndarray, speed: float, w: np.ndarray, table):
-        """Score and information in p of one window (its corners `used`, weights `w` (C,), gain-table
-        slots `table` (C, 1)) at the longest memory's estimate, and that estimate: three (C,) arrays
-        (zero for corners not used)."""
-        s = self._state
-        n_c = len(self.models)
-        zeros = np.zeros(n_c)
-        fit = s.fits[-1]
-        if fit is None or not fit.has_data:
-            return zeros, zeros, zeros
-        full = np.zeros((n_c, 1, self.freq.size, 3), dtype=complex)
-        full[used, 0] = spec
-        weight, x, log_cv = self._band(np.array([speed]))
-        weight = (w * used)[:, None, None] * weight[None]
-        _, score, info, wd = self._terms_at(fit, table, self._project(full, table), weight, x, log_cv)
-        u = np.einsum("cd,cd->c", wd, score[..., 2])
-        i = np.einsum("cd,cd->c", wd, info[..., 2, 2])
-        return u, i, np.where(used, fit.p_mean, 0.0)
 
     def _rebuild(self, c: int, start: int, t_end: float) -> None:
         """Corner c's memories from recent window `start` on only (each memory cut at the change);
         the windows before it leave the change test's record."""
         s = self._state
         share = self.hop / self.window
-        for m, tau in enumerate(self.config.memories_s):
-            k = s.scale[m]
-            s.spec[m, c] = 0.0
-            s.weight[m, c] = 0.0
-            s.weight2[m, c] = 0.0
-            s.speed_sum[m, c] = 0.0
-            for j in range(start, s.recent_t.size):
-                w = s.recent_weight[j, c]
-                if w <= 0:
-                    continue
-                b = self._speed_bin(s.recent_speed[j])
-                rho = math.exp(-(t_end - s.recent_t[j]) / tau)
-                s.spec[m, c, b] += rho * s.recent_spec[j, c] / k
-                s.weight[m, c, b] += rho * w / k
-                s.weight2[m, c, b] += rho * rho * w * w / share / k**2
-                s.speed_sum[m, c, b] += rho * w * s.recent_speed[j] / k
+        tau = np.asarray(self.config.memories_s, dtype=float)
+        rho = np.exp(-(t_end - s.recent_t[start:, None]) / tau[None, :])  # (J, M)
+        rho = np.where(np.isfinite(rho), rho, 0.0)
+        w = s.recent_weight[start:, c]
+        s.loglik[:, c] = np.einsum("jm,j...->m...", rho, s.recent_ll[start:, c])
+        s.weight[:, c] = rho.T @ w
+        s.weight2[:, c] = (rho.T**2) @ (w**2) / share
         s.recent_weight[:start, c] = 0.0
-        s.recent_spec[:start, c] = 0.0
-        s.recent_u[:, c] = s.recent_i[:, c] = 0.0  # the change test starts afresh for this corner
+        s.recent_ll[:start, c] = 0.0
         s.score[c] = 0.0  # the memories hold the same data now: equal weights
 
     def _forget(self, elapsed: float) -> None:
-        """Decay every memory by exp(−elapsed/τ) (renormalizing the stored sums when the factor is tiny)."""
+        """Decay every memory by exp(−elapsed/τ): a weighted likelihood."""
         s = self._state
-        for m, tau in enumerate(self.config.memories_s):
-            s.scale[m] *= math.exp(-elapsed / tau)
-            if s.scale[m] < 1e-100:
-                k = s.scale[m]
-                s.spec[m] *= k
-                s.weight[m] *= k
-                s.weight2[m] *= k * k
-                s.speed_sum[m] *= k
-                s.scale[m] = 1.0
+        decay = np.exp(-elapsed / np.asarray(self.config.memories_s, dtype=float))
+        s.loglik *= decay[:, None, None, None, None]
+        s.weight *= decay[:, None]
+        s.weight2 *= (decay**2)[:, None]
+
+    def _posteriors(self) -> _Fit:
+        r"""Every memory's posterior on dampings × slopes × the 1 kPa pressure grid.
+
+        :math:`\log \pi_m(d, b, p) = \kappa_m \sum_k \rho_k w_k \ell_k(d, b, p) + \log\pi_0(p) +
+        \log\pi_0(b) + \text{const}`: the memory's forgotten log-likelihood (spline-interpolated
+        from the coarse grid), the Gaussian prior on p cut to the range, the spike-and-slab prior
+        on w and a uniform one on the dampings. κ = Σρw/Σρ²w² (≥ 1; at most its value under
+        steady data, 1 + e^(−update/τ)) is the sandwich factor of a weighted likelihood: it makes
+        the posterior's width the error of the estimate under a constant pressure instead of the
+        conservative width of the forgotten information; once the data stop, the log-likelihood
+        fades with κ held and the posterior relaxes to the prior."""
+        s = self._state
+        has = s.weight > 1e-9
+        kappa = np.where(has, s.weight / np.maximum(s.weight2, 1e-300), 1.0)
+        kappa = np.clip(kappa, 1.0, self._kappa_max[:, None])
+        fine = (kappa[..., None, None, None] * s.loglik) @ self._to_fine.T  # (M, C, D, B, P)
+        log_post = fine + self._log_prior[None, :, None, None, :] + self._w_logprior[:, None]
+        log_post -= _logsumexp(log_post.reshape(log_post.shape[:2] + (-1,)), axis=2)[..., None, None, None]
+        prob = np.exp(log_post)
+        p_marg = prob.sum(axis=(2, 3))  # (M, C, P)
+        p_mean = p_marg @ self._p_grid
+        p_var = np.maximum(p_marg @ self._p_grid**2 - p_mean**2, 0.0)
+        w_marg = prob.sum(axis=(2, 4))  # (M, C, B)
+        w_mean = w_marg @ self.waviness_grid
+        w_var = np.maximum(w_marg @ self.waviness_grid**2 - w_mean**2, 0.0)
+        db = prob.sum(axis=4).reshape(prob.shape[:2] + (-1,))
+        mode = np.stack(np.unravel_index(np.argmax(db, axis=2), prob.shape[2:4]), axis=-1)
+        return _Fit(log_post=log_post, p_mean=p_mean, p_var=p_var, w_mean=w_mean, w_var=w_var,
+                    mode=mode, has_data=has)  # fmt: skip
+
+    def _predictive_scores(self, ll: np.ndarray, whole: np.ndarray) -> np.ndarray:
+        """Log predictive density of the newest block under each memory's posterior, (C, M) (0 for the
+        corners not `whole`): :math:`\\log \\sum_\\theta \\pi_m(\\theta) e^{\\ell(\\theta)}` with the
+        block's log-likelihood `ll` (C, D, B, G) on the grid, up to a constant common to the
+        memories."""
+        fit = self._state.fit
+        out = np.zeros((len(self.models), len(self.config.memories_s)))
+        fine = ll[whole] @ self._to_fine.T  # (W, D, B, P)
+        joint = fit.log_post[:, whole] + fine[None]
+        total = _logsumexp(joint.reshape(joint.shape[:2] + (-1,)), axis=2)  # (M, W)
+        out[whole] = total.T
+        return out
+
+    def _memory_weights(self) -> np.ndarray:
+        """The memories' weights per corner (C, M): their forgotten predictive scores, normalized."""
+        score = self._state.score - self._state.score.max(axis=1, keepdims=True)
+        pi = np.exp(score)
+        return pi / pi.sum(axis=1, keepdims=True)
 
     def _cross_spectra(self, a_s: np.ndarray, a_u: np.ndarray, *, own_grid: bool = False) -> np.ndarray:
         """One-sided cross-periodogram per Hz of (sprung, unsprung) on the window's frequencies, (C, F, 3):
@@ -1219,173 +1143,6 @@ class TyreMonitor:
         weight = mask * self._group_size[None, :]  # a band counts for the frequencies it averages
         return weight, np.log(f / (N0 * v)), np.log(4.0 * np.pi**2 * N0**2 * speeds)
 
-    def _predictive_scores(
-        self, spec: np.ndarray, used: np.ndarray, speed: float, share: float, table: np.ndarray
-    ) -> np.ndarray:
-        """Expected log predictive density of the newest block under each memory, (C, M), with the
-        window's gain-table slots `table` (C, 1).
-
-        `spec`: the block's periodogram zero-padded to the window, whose bins are correlated over
-        window/block neighbours: its Whittle log-likelihood is weighted by `share` = block/window."""
-        s = self._state
-        n_c, n_m = len(self.models), len(self.config.memories_s)
-        out = np.zeros((n_c, n_m))
-        corners = np.flatnonzero(used)
-        full = np.zeros((n_c, 1, self.freq.size, 3), dtype=complex)
-        full[corners, 0] = spec
-        proj = self._project(full, table)  # (C, D, 1, F)
-        mask, x, log_cv = self._band(np.array([speed]))
-        weight = share * used[:, None, None] * mask[None]  # (C, 1, F): the unused corners weigh nothing
-        for m, fit in enumerate(s.fits):
-            if fit is None or not fit.has_data:
-                continue
-            ll, _, info, wd = self._terms_at(fit, table, proj, weight, x, log_cv)
-            plug_in = _logsumexp(ll + np.log(np.maximum(wd, 1e-300)), axis=1)
-            i_pp = np.einsum("cd,cd->c", wd, info[:, :, 2, 2])
-            i_ll = np.einsum("cd,cd->c", wd, info[:, :, 0, 0])
-            out[corners, m] = (plug_in - 0.5 * (i_pp * fit.p_var + i_ll * fit.lam_var))[corners]
-        return out
-
-    # ------------------------------------------------------------------ estimation
-    def _empty_fit(self) -> _Fit:
-        """A memory with no data: the prior."""
-        n_c, n_d = len(self.models), self.config.damping_points
-        n_v = 2 if self._slope_free else 1
-        nan = np.full(n_c, np.nan)
-        return _Fit(
-            lam=np.full((n_v, n_c), np.nan), beta=np.zeros((n_v, n_c)),
-            p=np.broadcast_to(self._prior[:, None], (n_v, n_c, n_d)).copy(),
-            wd=np.full((n_v, n_c, n_d), 1.0 / n_d),
-            variant_weight=np.tile(np.eye(n_v)[0], (n_c, 1)), p_mean=self._prior.copy(),
-            p_var=np.full(n_c, self._prior_var), lam_mean=nan, lam_var=np.full(n_c, np.inf),
-            beta_mean=np.zeros(n_c), beta_var=np.full(n_c, np.inf), has_data=False,
-        )  # fmt: skip
-
-    def _fit_all(self, previous: list) -> list:
-        """Fisher scoring of every memory's weighted likelihood, warm-started from `previous`.
-
-        The memories' corners are independent rows of one kernel call per slope model (memory m,
-        corner c → row m·C + c), so the cost of Python is paid once per update, not per memory."""
-        cfg = self.config
-        s = self._state
-        n_m, n_c, n_d = len(cfg.memories_s), len(self.models), cfg.damping_points
-        n_v = 2 if self._slope_free else 1
-        W = s.weight * s.scale[:, None, None]  # (M, C, NB) Σ w_k
-        has_data = W.sum(axis=(1, 2)) > 1e-9
-        bins = np.flatnonzero(W.sum(axis=(0, 1)) > 1e-9)
-        if bins.size == 0:
-            return [self._empty_fit() for _ in range(n_m)]
-        rows = n_m * n_c
-        Wb = W[:, :, bins]  # (M, C, B)
-        speeds = (s.speed_sum[:, :, bins] * s.scale[:, None, None]).sum(axis=(0, 1)) / Wb.sum(axis=(0, 1))
-        band, x, log_cv = self._band(speeds)
-        stored = s.weight[:, :, bins]
-        mean_spec = s.spec[:, :, bins] / np.maximum(stored, 1e-300)[..., None, None]
-        mean_spec = mean_spec.reshape(rows, bins.size, self.freq.size, 3)
-        row_corner = np.tile(np.arange(n_c), n_m)
-        table = self._tables_for(np.repeat(row_corner[:, None], bins.size, axis=1), mean_spec)[0]
-        proj = self._project(mean_spec, table)  # (rows, D, B, F)
-        weight = Wb.reshape(rows, bins.size)[:, :, None] * band[None]  # (rows, B, F)
-        total = W.sum(axis=2).reshape(rows)
-        eff = (s.weight2.sum(axis=2) * s.scale[:, None] ** 2).reshape(rows) / np.maximum(total, 1e-300)
-        eff = np.where(total > 1e-9, np.minimum(eff, 1.0), 1.0)  # sandwich factor per row
-        prior_rows = np.tile(self._prior, n_m)
-        prior = np.repeat(prior_rows[:, None], n_d, axis=1)
-        lam0 = np.empty((n_v, rows))
-        beta0 = np.zeros((n_v, rows))
-        p0 = np.empty((n_v, rows, n_d))
-        cold = [m for m in range(n_m) if previous[m] is None or not previous[m].has_data]
-        if cold:
-            rows_cold = np.concatenate([np.arange(m * n_c, (m + 1) * n_c) for m in cold])
-            lam_c, p_c = self._cold_start(proj[rows_cold], weight[rows_cold], log_cv, table[rows_cold],
-                                          np.tile(np.arange(n_c), n_m)[rows_cold])  # fmt: skip
-            lam0[:, rows_cold], p0[:, rows_cold] = lam_c, p_c
-        for m in range(n_m):
-            if m in cold:
-                continue
-            sl = slice(m * n_c, (m + 1) * n_c)
-            lam = previous[m].lam.copy()
-            finite = np.isfinite(lam)
-            lam[~finite] = np.mean(lam[finite]) if np.any(finite) else math.log(1e-5)
-            lam0[:, sl], beta0[:, sl], p0[:, sl] = lam, previous[m].beta, previous[m].p
-        iterations = 30 if cold else 6
-        fits = []
-        for v in range(n_v):
-            lam, beta, p = (np.ascontiguousarray(a[v], dtype=float).copy() for a in (lam0, beta0, p0))
-            wd, ll, _, info = _newton_kernel(
-                v, lam, beta, p, table, self._log_gain, self._dlog_gain, float(self._p_grid[0]), self._p_step,
-                proj, weight, x, log_cv, prior_rows, self._prior_var, *cfg.pressure_range_kpa, *_LEVEL_BOUNDS,
-                *self._beta_bounds, iterations,
-            )  # fmt: skip
-            # per row, the covariance of (λ_c, [β_c], p_c) from the damping-weighted information
-            keep = [0, 1, 2] if v == 1 else [0, 2]
-            J = np.einsum("cd,cdij->cij", wd, info)[:, keep][:, :, keep] + np.eye(len(keep)) * 1e-9
-            cov = np.linalg.inv(J)
-            p_bar = np.einsum("cd,cd->c", wd, p)
-            p_var = cov[:, -1, -1] * eff + np.einsum("cd,cd->c", wd, (p - p_bar[:, None]) ** 2)
-            _, logdet = np.linalg.slogdet(J / (2.0 * np.pi))
-            ev = _logsumexp(ll - 0.5 * (p - prior) ** 2 / self._prior_var - math.log(n_d), axis=1)
-            ev -= 0.5 * logdet
-            if v == 1:
-                width = self._beta_bounds[1] - self._beta_bounds[0]
-                ev += math.log1p(-cfg.waviness_iso_weight) - math.log(width)
-            elif n_v == 2:
-                ev += math.log(cfg.waviness_iso_weight)
-            beta_var = cov[:, 1, 1] if v == 1 else np.zeros(rows)
-            fits.append((lam, beta, p, wd, ev, p_bar, p_var, cov[:, 0, 0], beta_var))
-        logev = np.array([f[4] for f in fits]).T  # (rows, V)
-        vw = np.exp(logev - logev.max(axis=1, keepdims=True))
-        vw /= vw.sum(axis=1, keepdims=True)
-
-        def mix(i_mean: int, i_var: int) -> tuple[np.ndarray, np.ndarray]:
-            means = np.array([f[i_mean] for f in fits]).T  # (rows, V)
-            mean = np.sum(vw * means, axis=1)
-            var = np.sum(vw * (np.array([f[i_var] for f in fits]).T + (means - mean[:, None]) ** 2), axis=1)
-            return mean, var
-
-        p_mean, p_var = mix(5, 6)
-        lam_mean, lam_var = mix(0, 7)
-        beta_mean, beta_var = mix(1, 8)
-        out = []
-        for m in range(n_m):
-            if not has_data[m]:
-                out.append(self._empty_fit())
-                continue
-            sl = slice(m * n_c, (m + 1) * n_c)
-            out.append(_Fit(
-                lam=np.array([f[0][sl] for f in fits]), beta=np.array([f[1][sl] for f in fits]),
-                p=np.array([f[2][sl] for f in fits]), wd=np.array([f[3][sl] for f in fits]),
-                variant_weight=vw[sl], p_mean=p_mean[sl], p_var=p_var[sl], lam_mean=lam_mean[sl],
-                lam_var=lam_var[sl], beta_mean=beta_mean[sl], beta_var=beta_var[sl], has_data=True,
-            ))  # fmt: skip
-        return out
-
-    def _cold_start(self, proj, weight, log_cv, table, corner) -> tuple[np.ndarray, np.ndarray]:
-        """First guess per row: the joint estimator's 5 kPa grid with the level profiled, w = 2.
-
-        `table` (rows, B): each row's gain-table slot per bin; `corner` (rows,): its corner. Returns
-        each row's log level (rows,) and pressure (rows, D), kPa."""
-        n_r, n_d = proj.shape[:2]
-        d = n_d // 2
-        grid = np.arange(0, self._p_grid.size, 5)
-        p0 = np.empty((n_r, n_d))
-        lam = np.full(n_r, math.log(1e-5))
-        bounds = (np.full((1, 1), _LEVEL_BOUNDS[0]), np.full((1, 1), _LEVEL_BOUNDS[1]))
-        for r in range(n_r):
-            w = weight[r].reshape(1, -1)
-            c = int(corner[r])
-            if not np.any(w > 0):
-                p0[r] = self._prior[c]
-                continue
-            log_gain = self._log_gain[table[r], d][:, grid].transpose(1, 0, 2)  # (P, B, F)
-            gain = np.exp(log_gain + log_cv[None, :, None])
-            gain = gain.reshape(grid.size, -1)
-            ll, lam_r, fisher = profile_loglik(proj[r, d].reshape(1, -1), gain, w, log_sv_bounds=bounds)
-            best = int(np.argmax(ll[0] - 0.5 * np.log(np.maximum(fisher[0], 1e-300))))
-            p0[r] = self._p_grid[grid][best]
-            lam[r] = lam_r[0, best]
-        return lam, p0
-
     def _fuse_previews(self, means: np.ndarray, vars_: np.ndarray, pi: np.ndarray):
         """Each rear's per-memory estimate fused with its track's preview given the front's
         (:func:`suvtwin.estimators.preview.fuse_track`; the front keeps its own): (C, M) kPa, kPa²."""
@@ -1411,25 +1168,20 @@ class TyreMonitor:
     def _output(self, t_end, speed, status, restarts, spring_rate, tyre_contact) -> MonitorUpdate:
         cfg = self.config
         s = self._state
-        score = s.score - s.score.max(axis=1, keepdims=True)
-        pi = np.exp(score)
-        pi /= pi.sum(axis=1, keepdims=True)  # (C, M)
-        means = np.array([f.p_mean for f in s.fits]).T  # (C, M)
-        vars_ = np.array([f.p_var for f in s.fits]).T
+        fit = s.fit
+        pi = self._memory_weights()  # (C, M)
+        means, vars_ = fit.p_mean.T, fit.p_var.T  # (C, M)
         means, vars_ = self._fuse_previews(means, vars_, pi)
         p = np.sum(pi * means, axis=1)
         var = np.sum(pi * (vars_ + (means - p[:, None]) ** 2), axis=1)
         sigma = np.sqrt(var)
-        # the road's level and waviness: the corners' estimates pooled (inverse-variance weights)
-        best = s.fits[int(np.argmax(pi.mean(axis=0)))]
-        level = waviness = math.nan
-        ok = np.isfinite(best.lam_mean) & np.isfinite(best.lam_var) & (best.lam_var > 0)
-        if best.has_data and np.any(ok):
-            level = math.exp(np.average(best.lam_mean[ok], weights=1.0 / best.lam_var[ok]))
-            spread = np.where(best.beta_var[ok] > 0, best.beta_var[ok], np.inf)
-            pooled = np.any(np.isfinite(spread))
-            waviness = 2.0 - (np.average(best.beta_mean[ok], weights=1.0 / spread) if pooled
-                              else float(np.mean(best.beta_mean[ok])))  # fmt: skip
+        # the road's waviness: the likeliest memory's, pooled over the corners with data
+        best = int(np.argmax(pi.mean(axis=0)))
+        ok = fit.has_data[best]
+        waviness = math.nan
+        if np.any(ok):
+            spread = np.maximum(fit.w_var[best, ok], 1e-6)
+            waviness = float(np.average(fit.w_mean[best, ok], weights=1.0 / spread))
         kt = stiffness_at_pressure_array(p * 1e3, *self._laws)
         kt_sig = np.abs(stiffness_sigma_at_pressure_sigma(sigma * 1e3, *self._laws))
         return MonitorUpdate(
@@ -1440,7 +1192,7 @@ class TyreMonitor:
             stiffness_sigma=kt_sig[None],
             observable=(sigma <= cfg.observable_sigma_kpa)[None],
             status=status[None].astype(np.int8),
-            road_level=np.array([level]),
+            road_level=np.array([s.level]),
             waviness=np.array([waviness]),
             speed_mps=np.array([speed]),
             memory_weights=pi[None],
