@@ -123,14 +123,12 @@ def _measure(system, u: np.ndarray, sigma, seeds: list[int]) -> np.ndarray:
 
 
 def _stats(values: np.ndarray) -> dict:
-    """values: (runs, 2) -> {channel: {mean, std}}."""
-    return {
-        c: {
-            "mean": round(float(values[:, i].mean()), 4),
-            "std": round(float(values[:, i].std(ddof=1)), 4) if values.shape[0] > 1 else 0.0,
-        }
-        for i, c in enumerate(CHANNELS)
-    }
+    """values: (runs, 2) -> {channel: {mean, std}} (4 significant digits; std over runs)."""
+    out = {}
+    for i, channel in enumerate(CHANNELS):
+        std = float(values[:, i].std(ddof=1)) if values.shape[0] > 1 else 0.0
+        out[channel] = {"mean": float(f"{values[:, i].mean():.4g}"), "std": float(f"{std:.4g}")}
+    return out
 
 
 def _readings(u: np.ndarray, uh: np.ndarray) -> dict:
