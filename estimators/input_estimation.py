@@ -2,9 +2,9 @@ r"""Half-car input estimation: wheel vertical force and pitch torque by CIE and 
 
 Usual call::
 
-    sys = discretize(PAPER_HALF_CAR, dt=1e-3)
-    est = estimate_inputs(z, sys, input_noise=1e2, measurement_std=1e-8, fading=0.1)  # CIE
-    est = estimate_inputs(z, sys, input_noise=1e2, measurement_std=1e-8, fading="adaptive")  # AWIE
+    system = discretize(PAPER_HALF_CAR, dt=1e-3)
+    est = estimate_inputs(z, system, input_noise=1e2, measurement_std=1e-8, fading=0.1)  # CIE
+    est = estimate_inputs(z, system, input_noise=1e2, measurement_std=1e-8, fading="adaptive")  # AWIE
     est.inputs        # (runs, steps, 2): [F_V in N, T_theta in N m]
 
 The method of Lin et al. 2021 [1]_ (after Ma et al. 2003 [2]_): a two-degree-of-freedom
@@ -88,7 +88,7 @@ References
    2021; our copy of the paper does not print the journal).
 .. [2] C.-K. Ma, P.-C. Tuan, J.-M. Chang, D.-C. Lin, "Adaptive weighting inverse method
    for the estimation of input loads", International Journal of Systems Science 34(3),
-   181–194, 2003. doi:10.1080/0020772031000158546
+   181–194, 2003.
 """
 
 from __future__ import annotations
