@@ -455,6 +455,10 @@ def monitor_command(
     corners: Annotated[
         str, typer.Option(help="Tyres to monitor, comma-separated among fl, fr, rl, rr.")
     ] = "fl,fr,rl,rr",
+    preview: Annotated[
+        bool, typer.Option("--preview", help="Fuse each rear tyre with its track's front→rear preview "
+                           "(sharper rears, but false warnings in weaves and curves: off by default).")
+    ] = False,
 ) -> None:
     """Monitor all tyres' pressures online (causal, streaming) and warn of deflation (UN R141 / FMVSS 138)."""
     _check_out(out, "--out", (".parquet",))
@@ -465,7 +469,7 @@ def monitor_command(
         raise InputError(f"--corners must list distinct tyres among fl, fr, rl, rr, got {corners!r}")
     from suvtwin.pipeline.monitoring import monitor_run, write_monitor
 
-    result = monitor_run(run, corners=names, placard_kpa=placard, reset_at_s=reset_at)
+    result = monitor_run(run, corners=names, placard_kpa=placard, reset_at_s=reset_at, preview=preview)
     write_monitor(result, out)
     last = result.table.iloc[-1] if len(result.table) else None
     typer.echo(f"wrote {out} ({len(result.table)} updates of {', '.join(names)})")

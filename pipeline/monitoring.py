@@ -72,7 +72,7 @@ def monitor_signals(
     tire_file: str | Path | None = None,
     config: MonitorConfig | None = None,
     chunk_s: float = 10.0,
-    preview: bool = True,
+    preview: bool = False,
 ) -> tuple[TyreMonitor, MonitorUpdate]:
     """Stream arrays through a new monitor in chunks of `chunk_s` s; the monitor and all its rows.
 
@@ -111,7 +111,7 @@ def monitor_run(
     config: MonitorConfig | None = None,
     rule: DeflationRule | None = None,
     chunk_s: float = 10.0,
-    preview: bool = True,
+    preview: bool = False,
 ) -> MonitorResult:
     """Run the monitor and the deflation warning on a run file.
 
@@ -167,6 +167,7 @@ def monitor_run(
         columns[f"{c}_warning"] = warn.warning[:, i]
         columns[f"{c}_spring_rate_npm"] = update.spring_rate[:, i]
         columns[f"{c}_tyre_contact"] = update.tyre_contact[:, i]
+        columns[f"{c}_change_probability"] = update.change_probability[:, i]
     columns["road_level_hat_m3"] = update.road_level
     columns["waviness_hat"] = update.waviness
     counts = monitor.counts
@@ -182,7 +183,7 @@ def monitor_run(
         "rule": asdict(rule),
         "segments": counts["segments"],
         "segment_status": {r: dict(zip(corners, counts[r].tolist(), strict=True)) for r in SKIP_REASONS},
-        "restarts": dict(zip(corners, counts["restarts"].tolist(), strict=True)),
+        "changes": dict(zip(corners, counts["changes"].tolist(), strict=True)),
         "warnings": {
             c: (
                 None

@@ -3,6 +3,7 @@ low speed, tracking a pressure change; the deflation warning on hand-made estima
 
 import numpy as np
 import pytest
+from scipy.linalg import expm
 from scipy.stats import truncnorm
 
 from suvtwin.estimators.deflation import DeflationRule, deflation_warnings
@@ -140,8 +141,8 @@ def test_monitor_follows_a_pressure_drop():
     s = out.pressure_sigma_pa[:, 0] / 1e3
     before = (out.t_s > 12) & (out.t_s < 20)
     assert np.all(np.abs(p[before] - 230) <= 2.5 * s[before])
-    # within 12.5 kPa from 25 s after the drop on (issue 12 asks for 15 s; measured: 195, 192 kPa at 42,
-    # 44 s, then 185-186 kPa: the memories fade the old pressure out instead of cutting it at the change)
+    # within 12.5 kPa from 25 s after the drop on (issue 12 asks for 15 s; measured: 199 kPa at 44 s, 190
+    # at 48 s: one corner's 8 s windows, each alone, read 210, 198, 172, 162 kPa after the drop)
     late = out.t_s > 45
     assert np.all(np.abs(p[late] - 180) <= 12.5)
     assert np.all(np.abs(p[late] - 180) <= 2.0 * s[late])
@@ -150,10 +151,46 @@ def test_monitor_follows_a_pressure_drop():
 def test_config_is_checked():
     with pytest.raises(ValueError, match="update_s"):
         MonitorConfig(segment_s=8.0, update_s=3.0)
-    with pytest.raises(ValueError, match="memories_s"):
-        MonitorConfig(memories_s=(16.0, 4.0))
+    with pytest.raises(ValueError, match="change_drift_kpa"):
+        MonitorConfig(steady_drift_kpa=2.0, change_drift_kpa=1.0)
+    with pytest.raises(ValueError, match="change_every_s"):
+        MonitorConfig(change_every_s=1.0)
     with pytest.raises(ValueError, match="dt"):
         TyreMonitor([QC], dt=0.5)
+
+
+def test_the_grid_filter_is_the_kalman_filter_on_a_gaussian_random_walk():
+    # one regime (changes and redraws too rare to matter), a Gaussian prior far inside the range and
+    # Gaussian window likelihoods: the grid filter must be the scalar Kalman filter of a random walk
+    cfg = MonitorConfig(steady_drift_kpa=1.0, change_drift_kpa=2.0, change_every_s=1e7, redraw_every_s=1e9,
+                        road_change_s=1e9, prior_pressure_kpa=230.0, prior_sigma_kpa=30.0)  # fmt: skip
+    mon = TyreMonitor([QC], dt=DT, config=cfg)
+    rng = np.random.default_rng(5)
+    mean, var = 230.0, 30.0**2
+    shape = (1, cfg.damping_points, mon.waviness_grid.size, mon._p_coarse.size)
+    for _ in range(12):
+        y, r = rng.normal(200.0, 15.0), rng.uniform(8.0, 25.0)
+        mon._predict(4.0)
+        var += 1.0**2 * 4.0
+        # a quadratic log-likelihood on the coarse grid: the cubic spline carries it to 1 kPa exactly
+        ll = np.broadcast_to(-0.5 * (mon._p_coarse - y) ** 2 / r**2, shape).copy()
+        mon._correct(ll, np.array([0.5]), np.array([True]))
+        gain = var / (var + r**2 / 0.5)
+        mean, var = mean + gain * (y - mean), (1.0 - gain) * var
+        fit = mon._moments()
+        assert abs(fit.p_mean[0] - mean) < 0.05
+        assert abs(fit.p_var[0] - (var + 1.0 / 12.0)) < 0.01 * var  # + the 1 kPa grid's Sheppard term
+
+
+def test_the_regime_chain_is_the_two_state_markov_process():
+    # the transition over an update equals expm of the continuous-time chain's generator
+    cfg = MonitorConfig()
+    mon = TyreMonitor([QC], dt=DT, config=cfg)
+    a, b = 1.0 / cfg.change_every_s, 1.0 / cfg.change_lasts_s
+    for elapsed in (4.0, 11.0, 300.0):
+        markov = mon._kernel(elapsed)[0]
+        expected = expm(np.array([[-a, a], [b, -b]]) * elapsed)
+        np.testing.assert_allclose(markov, expected, rtol=1e-12, atol=1e-15)
 
 
 # ---------------------------------------------------------------------------- deflation warning
@@ -169,9 +206,12 @@ def test_warning_on_a_placard_loss_with_time_and_evidence():
     # 230 kPa placard; the tyre reads 230 for 20 s, then 180 (22 % low) with σ 5 kPa
     t, p, s, obs = _rows([230.0] * 10 + [180.0] * 10, 5.0)
     w = deflation_warnings(t, p, s, obs, placard_kpa=230.0)
-    # P(p < 0.85·230 = 195.5) = Φ((195.5 − 180)/5) = Φ(3.1) ≈ 0.999; confirmed on the 2nd such row
+    # P(p < 0.875·230 = 201.25) = Φ((201.25 − 180)/5) = Φ(4.25) = 0.9999893; confirmed on the 2nd such row
     assert w.warning_time_s[0] == t[11]
-    assert w.warning_probability[0] == pytest.approx(0.99903, abs=1e-4)
+    assert w.warning_probability[0] == pytest.approx(0.9999893, abs=1e-6)
+    # with the 15 % rule: Φ((195.5 − 180)/5) = Φ(3.1) = 0.99903
+    w15 = deflation_warnings(t, p, s, obs, placard_kpa=230.0, rule=DeflationRule(detect_fraction=0.15))
+    assert w15.warning_probability[0] == pytest.approx(0.99903, abs=1e-5)
     assert not np.any(w.warning[:11, 0]) and np.all(w.warning[11:, 0])
     assert w.warning_reference_kpa[0] == 230.0
 
@@ -195,7 +235,7 @@ def test_learned_reference_after_reset():
     first = np.flatnonzero(np.isfinite(w.reference_kpa[:, 0]))[0]
     assert t[first] >= 10.0 + 60.0
     assert w.reference_kpa[first, 0] == 240.0
-    assert np.isfinite(w.warning_time_s[0]) and w.warning_pressure_kpa[0] < 0.85 * 240.0
+    assert np.isfinite(w.warning_time_s[0]) and w.warning_pressure_kpa[0] < 0.875 * 240.0
     with pytest.raises(ValueError, match="detect_fraction"):
         DeflationRule(detect_fraction=1.5)
 

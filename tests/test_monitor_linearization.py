@@ -65,7 +65,7 @@ def test_preview_fuses_the_rears_keeps_the_fronts_and_stays_causal(rough_loaded_
     acc_s = table[[f"{c}_accel_sprung_mps2" for c in CORNERS]].to_numpy()
     acc_u = table[[f"{c}_accel_unsprung_mps2" for c in CORNERS]].to_numpy()
     truth = table[[f"{c}_pressure_kpa" for c in CORNERS]].to_numpy()[-1]
-    mon, with_preview = monitor_signals(t, v, acc_s, acc_u, loads=loads)
+    mon, with_preview = monitor_signals(t, v, acc_s, acc_u, loads=loads, preview=True)
     _, alone = monitor_signals(t, v, acc_s, acc_u, loads=loads, preview=False)
     assert mon.tracks == ((0, 2), (1, 3))
     np.testing.assert_array_equal(with_preview.pressure_pa[:, :2], alone.pressure_pa[:, :2])
@@ -74,7 +74,7 @@ def test_preview_fuses_the_rears_keeps_the_fronts_and_stays_causal(rough_loaded_
     err = with_preview.pressure_pa[-1, 2:] / 1e3 - truth[2:]
     assert np.all(np.abs(err) <= 3.0 * sig_p / 1e3)
     # causal and independent of the chunking, preview included
-    _, chunked = monitor_signals(t, v, acc_s, acc_u, loads=loads, chunk_s=3.7)
+    _, chunked = monitor_signals(t, v, acc_s, acc_u, loads=loads, chunk_s=3.7, preview=True)
     np.testing.assert_array_equal(chunked.pressure_pa, with_preview.pressure_pa)
-    _, cut = monitor_signals(t[:16000], v[:16000], acc_s[:16000], acc_u[:16000], loads=loads)
+    _, cut = monitor_signals(t[:16000], v[:16000], acc_s[:16000], acc_u[:16000], loads=loads, preview=True)
     np.testing.assert_array_equal(cut.pressure_pa, with_preview.pressure_pa[: cut.t_s.size])
