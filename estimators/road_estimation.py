@@ -5,7 +5,7 @@ Usual call::
     road = iso_road_model(class_level("C"), speed=40 / 3.6)
     model = discretize(PAPER_QUARTER_CAR, road, dt=1e-3, method="euler")
     kf = kalman_filter(y, model, measurement_std=0.05)                       # eq. 8–15
-    mme = mme_kalman_filter(y, model, measurement_std=0.05, weight=1e-2)     # eq. 16–21
+    mme = mme_kalman_filter(y, model, measurement_std=0.05, weight=30.0)     # eq. 16–21
     kf.states[..., 4]   # (runs, steps): the road elevation estimate x̂_r, m
 
 The method of Wang et al. 2017 [1]_. A linear quarter car (sprung mass :math:`m_b`,
@@ -50,7 +50,11 @@ force, nothing else directly. We offer ``error_input="body"`` (:math:`G = e_2`, 
 an acceleration error of the body, m/s², the mass error's direct effect),
 ``"accelerations"`` (:math:`G = [e_2, e_4]`, body and wheel) and ``"all"``
 (:math:`G = I_6`, Mook & Junkins' generic model error on every state) and say which one a
-result used.
+result used. ``"all"`` is the default: the only one for which eq. 20 can be met.
+
+Measured (docs/road_estimation.md): eq. 21's covariance ignores the correction
+:math:`\Gamma_d d_k` it injects, so a small W turns the road's unpredictability into an
+uncorrected drift; with a correct model the MME can only add error to the KF.
 
 Errors of the paper corrected here (and why)
 --------------------------------------------
@@ -651,7 +655,7 @@ def mme_kalman_filter(
     *,
     measurement_std: npt.ArrayLike,
     weight: npt.ArrayLike,
-    error_input: str = "body",
+    error_input: str = "all",
     state_covariance0: npt.ArrayLike | None = None,
     state0: npt.ArrayLike | None = None,
 ) -> RoadEstimate:
@@ -666,7 +670,9 @@ def mme_kalman_filter(
         (s²/m)²); a scalar means W·I. :func:`covariance_constraint_weight` gives eq. 20's
         choice.
     error_input : {"body", "accelerations", "all"}, optional
-        Where the model error enters (:func:`error_input_matrix`); default ``"body"``.
+        Where the model error enters (:func:`error_input_matrix`); default ``"all"``
+        (G = I). With ``"body"`` one d cannot fit both channels, eq. 20 cannot be met, and
+        a small W drifts without bound (docs/road_estimation.md, finding 3).
 
     Returns
     -------
@@ -684,7 +690,7 @@ def covariance_constraint_weight(
     model: DiscreteRoadModel,
     *,
     measurement_std: npt.ArrayLike,
-    error_input: str = "body",
+    error_input: str = "all",
     bounds: tuple[float, float] = (1e-12, 1e12),
     iterations: int = 40,
     skip: int = 0,
