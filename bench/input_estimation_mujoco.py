@@ -14,6 +14,9 @@ pitch torque), mean and standard deviation over the seeds of:
 - ``suspension``: the loads û implies (û − K X̄ − C Ẋ̄) against what the suspensions put on the
   body, [F_s, T_s];
 
+- ``body`` (diagnostic): û against Mẍ + Cẋ + Kx from the noise-free heave and pitch, the input
+  that moves the linear half car exactly as the body moved (u* without the joints' share);
+
 each in three readings: ``aligned`` (100‖u(k−1) − û(k)‖/‖u‖), ``same_index``
 (100‖u(k) − û(k)‖/‖u‖) and ``eq32`` (100(‖u‖ − ‖û‖)/‖u‖, eq. 32 made dimensionless). Noise
 levels: the paper's σ = 1e-8 m and rad, ``realistic_std``, and ``none`` (noise-free data,
@@ -35,6 +38,7 @@ from suvtwin.pipeline.input_estimation import (
     PAPER_TABLE3,
     ROADS,
     SPEEDS_KMH,
+    body_input,
     closure_error,
     estimate_run,
     half_car_from_vehicle,
@@ -76,6 +80,7 @@ def main(argv: list[str] | None = None) -> int:
             table = simulate(obstacle_scenario(road, speed_kmh=speed)).table
             sim_time += time.perf_counter() - t0
             closure = closure_error(table, car)
+            body = body_input(table, car)
             cell = {
                 "road": road,
                 "speed_kmh": speed,
@@ -106,6 +111,7 @@ def main(argv: list[str] | None = None) -> int:
                     for truth_name, truth, est in (
                         ("input", r.truth_input, r.estimate),
                         ("suspension", r.truth_suspension, r.estimate_suspension),
+                        ("body", body, r.estimate),
                     ):
                         s = scores(truth, est)
                         entry[truth_name] = {reading: _stats(v) for reading, v in s.items()}

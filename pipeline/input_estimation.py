@@ -76,6 +76,7 @@ __all__ = [
     "ROADS",
     "SPEEDS_KMH",
     "RunEstimate",
+    "body_input",
     "body_measurements",
     "closure_error",
     "estimate_run",
@@ -277,6 +278,22 @@ def model_input(table: pd.DataFrame, car: HalfCar, vehicle: VehicleParams | None
     _, K, C = stiffness_damping(car)
     xdot = np.gradient(x, dt, axis=0)
     return suspension_loads(table, vehicle) + x @ K.T + xdot @ C.T
+
+
+def body_input(table: pd.DataFrame, car: HalfCar) -> np.ndarray:
+    r"""The input that moves the linear half car exactly as the simulated body moved, (steps, 2).
+
+    :math:`M\ddot x + C\dot x + Kx` with ẍ from second differences of the run's noise-free
+    heave and pitch (the end samples repeat their neighbours). It differs from
+    :func:`model_input` by what the joints' constraints put on the body
+    (:func:`closure_error`); a diagnostic, not the truth of the study.
+    """
+    x, dt = _body_motion(table)
+    M, K, C = stiffness_damping(car)
+    accel = np.empty_like(x)
+    accel[1:-1] = (x[2:] - 2 * x[1:-1] + x[:-2]) / dt**2
+    accel[0], accel[-1] = accel[1], accel[-2]
+    return accel @ M.T + x @ K.T + np.gradient(x, dt, axis=0) @ C.T
 
 
 def closure_error(table: pd.DataFrame, car: HalfCar, vehicle: VehicleParams | None = None) -> np.ndarray:
