@@ -485,6 +485,64 @@ def monitor_command(
         typer.echo(f"  {c}: {now}{note}")
 
 
+@app.command("input-estimate")
+def input_estimate_command(
+    run: Annotated[
+        Path, typer.Argument(help="Run file (suvtwin simulate) or any Parquet with t_s, heave_m, pitch_rad.")
+    ],
+    out: Annotated[
+        Path,
+        typer.Option(
+            "--out",
+            help="Output Parquet: t_s, estimated vertical force (N) and pitch torque (N m), "
+            "and their truth when the run has the suspension forces.",
+        ),
+    ],
+    method: Annotated[str, typer.Option(help="AWIE, or CIE with --fading.")] = "AWIE",
+    fading: Annotated[float, typer.Option(help="CIE's constant fading factor f_tr (0 < f ≤ 1).")] = 0.1,
+    heave_noise: Annotated[
+        float, typer.Option(help="σ of the white noise added to the measured heave, m (0–1; paper 1e-8).")
+    ] = 1e-8,
+    pitch_noise: Annotated[
+        float, typer.Option(help="σ of the white noise added to the measured pitch, rad (0–1; paper 1e-8).")
+    ] = 1e-8,
+    input_noise: Annotated[
+        float, typer.Option("--q", help="Q, the filter's input-noise variance, N² (> 0).")
+    ] = 1e2,
+    seed: Annotated[int, typer.Option(help="Seed of the measurement noise (≥ 0).")] = 0,
+) -> None:
+    """Estimate the half car's vertical force and pitch torque from heave and pitch (Lin et al. 2021)."""
+    _check_out(out, "--out", (".parquet",))
+    if seed < 0:
+        raise InputError(f"--seed must be ≥ 0, got {seed}")
+    if method.upper() not in ("AWIE", "CIE"):
+        raise InputError(f"--method must be AWIE or CIE, got {method!r}")
+    if not 0.0 < fading <= 1.0:
+        raise InputError(f"--fading must be in (0, 1], got {fading:g}")
+    for name, value in (("--heave-noise", heave_noise), ("--pitch-noise", pitch_noise)):
+        if not 0.0 < value <= 1.0:
+            raise InputError(f"{name} must be in (0, 1] (m or rad), got {value:g}")
+    if not input_noise > 0.0:
+        raise InputError(f"--q must be > 0 N², got {input_noise:g}")
+    from suvtwin.pipeline.input_estimation import estimate_columns, estimate_run, scores, write_input_estimate
+    from suvtwin.pipeline.simulator import read_run
+
+    table, meta = read_run(run)
+    chosen = "AWIE" if method.upper() == "AWIE" else fading
+    result = estimate_run(table, method=chosen, measurement_std=(heave_noise, pitch_noise),
+                          input_noise=input_noise, seed=seed)  # fmt: skip
+    label = "AWIE" if chosen == "AWIE" else f"CIE f={fading:g}"
+    metadata = {"method": label, "heave_noise_m": heave_noise, "pitch_noise_rad": pitch_noise,
+                "q": input_noise, "seed": seed, "run": str(run),
+                "run_scenario": meta.get("scenario")}  # fmt: skip
+    write_input_estimate(estimate_columns(result), out, metadata)
+    typer.echo(f"wrote {out} ({len(result.t)} samples, {label})")
+    if result.truth_input is not None:
+        err = scores(result.truth_input, result.estimate[0])["aligned"]
+        typer.echo(f"  error against the simulator (100·‖u − û‖/‖u‖, aligned): "
+                   f"vertical force {err[0]:.1f} %, pitch torque {err[1]:.1f} %")  # fmt: skip
+
+
 @app.command("score")
 def score_command(
     estimate: Annotated[Path, typer.Argument(help="Estimate file (suvtwin estimate).")],

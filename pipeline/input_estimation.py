@@ -79,6 +79,7 @@ __all__ = [
     "body_input",
     "body_measurements",
     "closure_error",
+    "estimate_columns",
     "estimate_run",
     "half_car_from_vehicle",
     "model_input",
@@ -86,6 +87,7 @@ __all__ = [
     "scores",
     "stiffness_damping",
     "suspension_loads",
+    "write_input_estimate",
 ]
 
 ROADS = ("sine_bump", "cleat", "random")
@@ -343,23 +345,23 @@ class RunEstimate:
         û(k) = [F_V, T_θ], N and N m (estimates u(k−1); Lin et al. 2021, eq. 19 / 22).
     estimate_suspension : numpy.ndarray
         The suspension loads û implies, û − K X̄ − C Ẋ̄ with the filter's state X̄(k|k), N and N m.
-    truth_input : numpy.ndarray
-        u* (:func:`model_input`).
-    truth_suspension : numpy.ndarray
-        [F_s, T_s] (:func:`suspension_loads`).
+    truth_input : numpy.ndarray or None
+        u* (:func:`model_input`); None when the run has no suspension forces.
+    truth_suspension : numpy.ndarray or None
+        [F_s, T_s] (:func:`suspension_loads`); None when the run has no suspension forces.
     """
 
     t: np.ndarray
     estimate: np.ndarray
     estimate_suspension: np.ndarray
-    truth_input: np.ndarray
-    truth_suspension: np.ndarray
+    truth_input: np.ndarray | None
+    truth_suspension: np.ndarray | None
 
 
 def estimate_run(
     table: pd.DataFrame,
     *,
-    method: str = "AWIE",
+    method: str | float = "AWIE",
     measurement_std: npt.ArrayLike = 1e-8,
     filter_std: npt.ArrayLike | None = None,
     input_noise: float = 1e2,
@@ -370,14 +372,21 @@ def estimate_run(
 ) -> RunEstimate:
     """CIE or AWIE (Lin et al. 2021, eq. 8–22) on a run's noisy heave and pitch.
 
-    `method` is a key of :data:`METHODS`; the measurements get white noise of
+    `method` is a key of :data:`METHODS` or, for CIE, its fading factor f_tr in (0, 1]; the
+    measurements get white noise of
     `measurement_std` (m and rad); the filter's R is diag(`filter_std`²) (default
     `measurement_std`; give it to run the same filter on noise-free data) and Q is
     `input_noise`·I (the paper: σ = 10⁻⁸, Q = 10², §3.2). `runs` noise draws from `seed`
     are estimated as one batch. Initial values as the paper's §3.2.
     """
-    if method not in METHODS:
-        raise InputError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+    if isinstance(method, str) and method in METHODS:
+        fading = METHODS[method]
+    elif not isinstance(method, str) and np.isfinite(method) and 0.0 < method <= 1.0:
+        fading = float(method)  # CIE with this fading factor
+    else:
+        raise InputError(
+            f"method must be one of {', '.join(METHODS)} or a fading factor in (0, 1], got {method!r}"
+        )
     if not np.isfinite(input_noise) or input_noise <= 0:
         raise InputError(f"input_noise must be > 0 N^2, got {input_noise!r}")
     vehicle = vehicle if vehicle is not None else load_vehicle()
@@ -389,18 +398,58 @@ def estimate_run(
     sigma = np.broadcast_to(np.asarray(assumed, dtype=float), (2,))
     if not np.all(np.isfinite(sigma)) or np.any(sigma <= 0) or np.any(sigma > 1.0):
         raise InputError(f"filter_std (default measurement_std) must be in (0, 1] m and rad, got {assumed!r}")
-    est = estimate_inputs(z, system, input_noise=input_noise, measurement_std=sigma, fading=METHODS[method])
+    est = estimate_inputs(z, system, input_noise=input_noise, measurement_std=sigma, fading=fading)
     _, K, C = stiffness_damping(car)
     xs = est.states[..., [0, 2]]
     vs = est.states[..., [1, 3]]
     implied = est.inputs - xs @ K.T - vs @ C.T
+    has_truth = all(f"{c}_susp_force_n" in table for c in CORNERS)
     return RunEstimate(
         t=_column(table, "t_s"),
         estimate=est.inputs,
         estimate_suspension=implied,
-        truth_input=model_input(table, car, vehicle),
-        truth_suspension=suspension_loads(table, vehicle),
+        truth_input=model_input(table, car, vehicle) if has_truth else None,
+        truth_suspension=suspension_loads(table, vehicle) if has_truth else None,
     )
+
+
+def estimate_columns(result: RunEstimate, run: int = 0) -> dict[str, np.ndarray]:
+    """One noise draw of `result` as output columns (SI): t, estimates, and the truth if known.
+
+    ``t_s``; ``force_hat_n``, ``torque_hat_nm`` (û, the half car's input, eq. 19 / 22);
+    ``suspension_force_hat_n``, ``suspension_torque_hat_nm`` (the loads û implies); and, when
+    the run has them, ``force_true_n``, ``torque_true_nm`` (u*) and ``suspension_force_true_n``,
+    ``suspension_torque_true_nm`` ([F_s, T_s]). Torques nose up > 0, about the centre of gravity.
+    """
+    out = {
+        "t_s": result.t,
+        "force_hat_n": result.estimate[run, :, 0],
+        "torque_hat_nm": result.estimate[run, :, 1],
+        "suspension_force_hat_n": result.estimate_suspension[run, :, 0],
+        "suspension_torque_hat_nm": result.estimate_suspension[run, :, 1],
+    }
+    if result.truth_input is not None and result.truth_suspension is not None:
+        out["force_true_n"] = result.truth_input[:, 0]
+        out["torque_true_nm"] = result.truth_input[:, 1]
+        out["suspension_force_true_n"] = result.truth_suspension[:, 0]
+        out["suspension_torque_true_nm"] = result.truth_suspension[:, 1]
+    return out
+
+
+def write_input_estimate(columns: dict[str, np.ndarray], path, metadata: dict) -> None:
+    """Write :func:`estimate_columns` to Parquet (atomically), `metadata` as JSON in the schema."""
+    import json
+
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from suvtwin.files import atomic_write
+
+    table = pa.Table.from_pydict({k: np.asarray(v, dtype=float) for k, v in columns.items()})
+    table = table.replace_schema_metadata(
+        {b"suvtwin.input_estimate": json.dumps(metadata, sort_keys=True).encode()}
+    )
+    atomic_write(path, lambda tmp: pq.write_table(table, tmp, compression="zstd"))
 
 
 def scores(truth: npt.ArrayLike, estimate: npt.ArrayLike) -> dict[str, np.ndarray]:
