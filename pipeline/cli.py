@@ -678,6 +678,9 @@ def run_command(
     )
     extra = "".join(f", {out / name}" for name in ("premise.csv", "monitor.json") if (out / name).is_file())
     typer.echo(f"wrote {out / 'report.html'}, {out / 'metrics.csv'}, {out / 'monte_carlo.csv'}{extra}")
+    if (out / "input_estimation.json").is_file():
+        typer.echo(f"paper 001's input estimation on the SUV ({t['input_estimation_s']:.0f} s): "
+                   f"{out / 'input_estimation.json'}")  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:

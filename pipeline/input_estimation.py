@@ -81,6 +81,7 @@ __all__ = [
     "closure_error",
     "estimate_columns",
     "estimate_run",
+    "input_estimation_study",
     "half_car_from_vehicle",
     "model_input",
     "obstacle_scenario",
@@ -465,4 +466,87 @@ def scores(truth: npt.ArrayLike, estimate: npt.ArrayLike) -> dict[str, np.ndarra
         "aligned": normalized_error(u[..., :-1, :], uh[..., 1:, :]),
         "same_index": normalized_error(u, uh),
         "eq32": norm_difference_error(u, uh),
+    }
+
+
+FIGURE_CASES = {30: ("AWIE", "CIE f=0.9"), 90: ("AWIE", "CIE f=0.1")}
+"""Speed → the two methods the paper plots: Figures 10–12 (30 km/h: AWIE, CIE f_tr = 0.9) and
+13–15 (90 km/h: AWIE, CIE f_tr = 0.1), each for the three roads."""
+
+
+def input_estimation_study(
+    *,
+    n_seeds: int = 10,
+    measurement_std: float = 1e-8,
+    input_noise: float = 1e2,
+    roads: tuple[str, ...] = ROADS,
+    speeds_kmh: tuple[float, ...] = SPEEDS_KMH,
+    seed: int = 0,
+) -> dict:
+    """The MuJoCo analog of Lin et al. 2021, Tables 2–3 and Figures 10–15, as a JSON-able dict.
+
+    One simulation per road and speed (:func:`obstacle_scenario`, scenario seed `seed`), each
+    method of :data:`METHODS` on `n_seeds` noise draws. ``cells``: one row per road, speed,
+    method with, per channel [F_V, T_θ] in %: ``eq32`` and ``aligned`` against u*
+    (mean and std over the draws; :func:`scores`), ``suspension_aligned`` against the
+    suspension loads; ``paper`` is the paper's value or None. ``closure``: :func:`closure_error`
+    per road and speed. ``examples``: the time series of the paper's figures
+    (:data:`FIGURE_CASES`; first noise draw), ``t_s``, ``truth`` and ``estimate`` as
+    [[F_V…], [T_θ…]] in N and N m.
+    """
+    from suvtwin.pipeline.simulator import simulate
+
+    if not 1 <= n_seeds <= 1000:
+        raise InputError(f"n_seeds must be in [1, 1000], got {n_seeds!r}")
+    vehicle = load_vehicle()
+    car = half_car_from_vehicle(vehicle)
+    cells, closure, examples = [], [], []
+    for road in roads:
+        for speed in speeds_kmh:
+            table = simulate(obstacle_scenario(road, speed_kmh=speed, seed=seed)).table
+            percent = [round(float(v), 3) for v in closure_error(table, car, vehicle)]
+            closure.append({"road": road, "speed_kmh": speed, "percent": percent})
+            for method in METHODS:
+                r = estimate_run(table, method=method, measurement_std=measurement_std,
+                                 input_noise=input_noise, seed=seed, runs=n_seeds, car=car,
+                                 vehicle=vehicle)  # fmt: skip
+                s = scores(r.truth_input, r.estimate)
+                sus = scores(r.truth_suspension, r.estimate_suspension)["aligned"]
+                if speed == 30:
+                    paper = PAPER_TABLE2.get(road, {}).get(method)
+                else:
+                    paper = PAPER_TABLE3.get(road, {}).get(int(speed), {}).get(method)
+                cells.append({
+                    "road": road, "speed_kmh": speed, "method": method,
+                    "paper": None if paper is None else list(paper),
+                    "eq32": _mean_std(s["eq32"]), "aligned": _mean_std(s["aligned"]),
+                    "suspension_aligned": _mean_std(sus),
+                })  # fmt: skip
+                if method in FIGURE_CASES.get(int(speed), ()):
+                    examples.append({
+                        "road": road, "speed_kmh": speed, "method": method,
+                        "t_s": np.round(r.t, 4).tolist(),
+                        "truth": np.round(r.truth_input.T, 1).tolist(),
+                        "estimate": np.round(r.estimate[0].T, 1).tolist(),
+                    })  # fmt: skip
+    return {
+        "settings": {
+            "n_seeds": n_seeds,
+            "measurement_std": measurement_std,
+            "q": input_noise,
+            "seed": seed,
+            "half_car": dict(car.__dict__),
+            "lead_s": LEAD_S,
+        },  # fmt: skip
+        "cells": cells,
+        "closure": closure,
+        "examples": examples,
+    }
+
+
+def _mean_std(values: np.ndarray) -> dict[str, list[float]]:
+    """Mean and std over draws (axis 0) per channel, 4 significant digits."""
+    return {
+        "mean": [float(f"{v:.4g}") for v in values.mean(axis=0)],
+        "std": [float(f"{v:.4g}") for v in values.std(axis=0)],
     }

@@ -32,6 +32,7 @@ SMALL = dict(
     premise_runs_per_class=1,
     monitor_leak_runs=1,
     monitor_warning_runs=1,
+    input_estimation_seeds=1,
 )
 
 
@@ -160,6 +161,17 @@ def test_report_is_self_contained_with_goals_and_figures(finished):
     assert monitor["warning"]["targets"]["detected_within_60s"]["value"] in (0.0, 1.0)
     example = monitor["slow_leak"]["example"]
     assert example["truth_kpa"][0] > example["truth_kpa"][-1]  # the leaking tyre's true pressure falls
+
+
+def test_report_has_paper_001_on_the_suv_when_asked(finished):
+    out, summary = finished
+    page = (out / "report.html").read_text()
+    assert "Paper 001 on the MuJoCo SUV" in page and "Table 2 analog (30 km/h)" in page
+    assert all(f"Figure {n} analog" in page for n in range(10, 16))
+    study = json.loads((out / "input_estimation.json").read_text())
+    assert len(study["cells"]) == 3 * 3 * 3 and study["settings"]["n_seeds"] == 1
+    assert summary["timings"]["input_estimation_s"] > 0
+    assert preset("full").input_estimation_seeds == 10 and preset("quick").input_estimation_seeds == 0
 
 
 def _count(folder: Path, pattern: str) -> int:

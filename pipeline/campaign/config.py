@@ -66,6 +66,10 @@ class CampaignConfig(BaseModel):
     monitor_warning_runs: int = Field(default=100, ge=0, le=1000)
     """Deflation-warning runs (one tyre or all four 20 % below placard) of the monitor's study (set
     ``warning``); 0: none."""
+    input_estimation_seeds: int = Field(default=0, ge=0, le=1000)
+    """Noise draws of paper 001's input-estimation study on the SUV (CIE, AWIE on the sine bump, cleat
+    and random road at 30/60/90 km/h, :func:`suvtwin.pipeline.input_estimation.input_estimation_study`);
+    0: not run."""
 
     @model_validator(mode="after")
     def _known_names(self) -> CampaignConfig:
@@ -89,7 +93,8 @@ class CampaignConfig(BaseModel):
 def preset(name: str, **overrides) -> CampaignConfig:
     """The ``quick`` (40 Monte Carlo runs, GA 100 × 100, premise check 6 runs per class, monitor study
     2 slow leaks and 4 warning runs) or ``full`` (paper scale: 100 runs, GA 100 × 1000, premise check
-    25 runs per class, monitor study 20 slow leaks and 100 warning runs) campaign, with optional
+    25 runs per class, monitor study 20 slow leaks and 100 warning runs, paper 001's input-estimation
+    study with 10 noise draws) campaign, with optional
     field overrides (e.g. ``monte_carlo_runs=40``)."""
     presets = {
         "quick": {
@@ -107,6 +112,7 @@ def preset(name: str, **overrides) -> CampaignConfig:
             "premise_runs_per_class": 25,
             "monitor_leak_runs": 20,
             "monitor_warning_runs": 100,
+            "input_estimation_seeds": 10,
         },
     }
     if name not in presets:

@@ -240,10 +240,12 @@ def write_report(
     *,
     premise: pd.DataFrame | None = None,
     monitor: dict | None = None,
+    input_estimation: dict | None = None,
 ) -> None:
     """Write the self-contained HTML report of a campaign (atomically); `premise`: the summary of
     paper 000's premise check (:func:`suvtwin.pipeline.premise.premise_summary`), or None;
-    `monitor`: the online monitor's study (``monitor.json``), or None."""
+    `monitor`: the online monitor's study (``monitor.json``), or None; `input_estimation`: paper
+    001's input-estimation study on the SUV (``input_estimation.json``), or None."""
     from suvtwin.estimators.tire_pressure import PAPER_TABLE_3
     from suvtwin.mjcf.vehicle import load_vehicle
 
@@ -441,6 +443,11 @@ def write_report(
 
     if monitor:
         parts.extend(_monitor_html(monitor))
+
+    if input_estimation:
+        from suvtwin.pipeline.report.input_estimation import input_estimation_html
+
+        parts.extend(input_estimation_html(input_estimation))
 
     parts.append("<h2>8. Reproduce</h2>")
     timings = summary.get("timings", {})
