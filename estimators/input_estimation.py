@@ -99,7 +99,7 @@ import numpy as np
 import numpy.typing as npt
 from scipy.linalg import expm
 
-from suvtwin.errors import InputError
+from suvtwin.errors import InputError, positive
 
 __all__ = [
     "PAPER_HALF_CAR",
@@ -120,13 +120,6 @@ __all__ = [
 N_STATES = 4
 N_INPUTS = 2
 N_OUTPUTS = 2
-
-
-def _positive(name: str, value: float, unit: str) -> float:
-    value = float(value)
-    if not np.isfinite(value) or value <= 0.0:
-        raise InputError(f"{name} must be a finite number > 0 {unit}, got {value!r}")
-    return value
 
 
 @dataclass(frozen=True)
@@ -161,7 +154,7 @@ class HalfCar:
                  "rear_stiffness": "N/m", "front_damping": "N s/m", "rear_damping": "N s/m",
                  "front_length": "m", "rear_length": "m"}
         for name, unit in units.items():
-            _positive(f"HalfCar.{name}", getattr(self, name), unit)
+            positive(f"HalfCar.{name}", getattr(self, name), unit)
 
     @property
     def wheelbase(self) -> float:
@@ -243,7 +236,7 @@ def discretize(car: HalfCar, *, dt: float) -> DiscreteHalfCar:
     dt : float
         Sampling interval ΔT, s (> 0).
     """
-    dt = _positive("dt", dt, "s")
+    dt = positive("dt", dt, "s")
     F, G, H = continuous_matrices(car)
     block = np.zeros((N_STATES + N_INPUTS, N_STATES + N_INPUTS))
     block[:N_STATES, :N_STATES] = F
@@ -289,8 +282,8 @@ def road_inputs(
 
 
 def _pulse_geometry(car: HalfCar, speed: float, height: float, length: float) -> tuple[float, float, float]:
-    speed = _positive("speed", speed, "m/s")
-    length = _positive("obstacle length", length, "m")
+    speed = positive("speed", speed, "m/s")
+    length = positive("obstacle length", length, "m")
     height = float(height)
     if not np.isfinite(height):
         raise InputError(f"obstacle height must be finite (m), got {height!r}")

@@ -99,7 +99,7 @@ import numpy as np
 import numpy.typing as npt
 from scipy.linalg import expm, solve_discrete_lyapunov
 
-from suvtwin.errors import InputError
+from suvtwin.errors import InputError, positive
 from suvtwin.roads.iso8608 import N0_CYCLES_PER_M
 
 __all__ = [
@@ -127,16 +127,6 @@ N_STATES = 6
 N_OUTPUTS = 2
 ROAD = 4  # index of x_r in the state
 ERROR_INPUTS = ("body", "accelerations", "all")
-
-
-def _positive(name: str, value: float, unit: str) -> float:
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} must be a finite number > 0 {unit}, got {value!r}") from None
-    if not np.isfinite(value) or value <= 0.0:
-        raise InputError(f"{name} must be a finite number > 0 {unit}, got {value!r}")
-    return value
 
 
 @dataclass(frozen=True)
@@ -167,7 +157,7 @@ class QuarterCar:
         units = {"sprung_mass": "kg", "unsprung_mass": "kg", "suspension_stiffness": "N/m",
                  "tire_stiffness": "N/m", "damping": "N s/m"}
         for name, unit in units.items():
-            _positive(f"QuarterCar.{name}", getattr(self, name), unit)
+            positive(f"QuarterCar.{name}", getattr(self, name), unit)
 
     def with_sprung_mass(self, sprung_mass: float) -> QuarterCar:
         """The same car with another sprung mass m_b, kg (the paper's m_b ± Δm)."""
@@ -204,9 +194,9 @@ class RoadModel:
     intensity: float
 
     def __post_init__(self) -> None:
-        _positive("RoadModel.a1", self.a1, "1/s^2")
-        _positive("RoadModel.a2", self.a2, "1/s")
-        _positive("RoadModel.intensity", self.intensity, "m^2/s^3")
+        positive("RoadModel.a1", self.a1, "1/s^2")
+        positive("RoadModel.a2", self.a2, "1/s")
+        positive("RoadModel.intensity", self.intensity, "m^2/s^3")
 
 
 def iso_road_model(
@@ -234,10 +224,10 @@ def iso_road_model(
         Spatial frequencies of the two poles, cycles/m (defaults 0.011 and 2.83, the ISO
         8608 reporting band). ``n_low < n_high``.
     """
-    gd_n0 = _positive("gd_n0", gd_n0, "m^3")
-    speed = _positive("speed", speed, "m/s")
-    n_low = _positive("n_low", n_low, "cycles/m")
-    n_high = _positive("n_high", n_high, "cycles/m")
+    gd_n0 = positive("gd_n0", gd_n0, "m^3")
+    speed = positive("speed", speed, "m/s")
+    n_low = positive("n_low", n_low, "cycles/m")
+    n_high = positive("n_high", n_high, "cycles/m")
     if n_low >= n_high:
         raise InputError(f"n_low must be < n_high (cycles/m), got {n_low} and {n_high}")
     w1, w2 = 2.0 * np.pi * n_low * speed, 2.0 * np.pi * n_high * speed
@@ -343,7 +333,7 @@ def discretize(
     acceleration_noise : float, optional
         Intensity of the white acceleration noise on body and wheel, m²/s³ (default 0).
     """
-    dt = _positive("dt", dt, "s")
+    dt = positive("dt", dt, "s")
     if method not in ("euler", "exact"):
         raise InputError(f"method must be 'euler' or 'exact', got {method!r}")
     acceleration_noise = float(acceleration_noise)
@@ -416,7 +406,7 @@ def simulate_quarter_car(car: QuarterCar, road_height: npt.ArrayLike, *, dt: flo
     QuarterCarResponse
         Leading run axis always present.
     """
-    dt = _positive("dt", dt, "s")
+    dt = positive("dt", dt, "s")
     z = np.atleast_2d(np.asarray(road_height, dtype=float))
     if z.ndim != 2 or z.shape[1] < 2 or not np.all(np.isfinite(z)):
         raise InputError(

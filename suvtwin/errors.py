@@ -9,7 +9,9 @@ exits with status 2. Anything else escaping is a bug and keeps its traceback.
 
 from __future__ import annotations
 
-__all__ = ["InputError", "RunError"]
+import math
+
+__all__ = ["InputError", "RunError", "positive"]
 
 
 class InputError(ValueError):
@@ -18,3 +20,15 @@ class InputError(ValueError):
 
 class RunError(RuntimeError):
     """A valid request that could not be carried out (diverged simulation, no OpenGL, ...)."""
+
+
+def positive(name: str, value: object, unit: str) -> float:
+    """`value` as a float if it is a finite number > 0, else :class:`InputError` naming `name` and
+    `unit` (e.g. ``positive("dt", dt, "s")``)."""
+    try:
+        number = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be a finite number > 0 {unit}, got {value!r}") from None
+    if not math.isfinite(number) or number <= 0.0:
+        raise InputError(f"{name} must be a finite number > 0 {unit}, got {value!r}")
+    return number
