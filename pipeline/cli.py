@@ -24,7 +24,7 @@ import typer
 
 from suvtwin.errors import InputError, RunError
 from suvtwin.pipeline.estimator_registry import estimator_families, estimator_help, road_inputs
-from suvtwin.roads.limits import MAX_SPACING_M, MIN_RECOMMENDED_LENGTH_M
+from suvtwin.roads.limits import MAX_ROAD_LENGTH_M, MAX_ROAD_SAMPLES, MAX_SPACING_M, MIN_RECOMMENDED_LENGTH_M
 
 if TYPE_CHECKING:
     from suvtwin.roads.spec import RoadSpec
@@ -88,23 +88,9 @@ def _check_out(path: Path, option: str, suffixes: tuple[str, ...]) -> None:
 
 
 def _load_mapping(path: Path, option: str) -> object:
-    import tomllib
+    from suvtwin.files import read_settings
 
-    import yaml
-
-    if not path.is_file():
-        raise InputError(f"{option}: file {str(path)!r} does not exist")
-    text = path.read_text()
-    try:
-        if path.suffix.lower() == ".toml":
-            return tomllib.loads(text)
-        if path.suffix.lower() == ".json":
-            return json.loads(text)
-        if path.suffix.lower() in (".yaml", ".yml"):
-            return yaml.safe_load(text)
-    except (tomllib.TOMLDecodeError, json.JSONDecodeError, yaml.YAMLError) as error:
-        raise InputError(f"{option}: {str(path)!r} is malformed: {error}".replace("\n", " ")) from None
-    raise InputError(f"{option}: file must be .yaml, .yml, .toml or .json, got {str(path)!r}")
+    return read_settings(path, what=option)
 
 
 @app.command("road")
@@ -117,7 +103,7 @@ def road_command(
         ),
     ] = None,
     length: Annotated[
-        float, typer.Option(help="Road length, m (> 0; ≥ 100 m to hold 0.01 cycle/m).")
+        float, typer.Option(help="Road length, m (> 0, ≤ 200000; ≥ 100 m to hold 0.01 cycle/m).")
     ] = 300.0,
     spacing: Annotated[
         float,
@@ -204,14 +190,19 @@ def _spec_from_options(
         raise InputError("give --class (A–H) or --gd-n0 (m³ at 0.1 cycle/m), or --spec FILE")
     if road_class is not None and road_class.strip().upper() not in CLASSES:
         raise InputError(f"--class must be one of A–H, got {road_class!r}")
-    if not length > 0.0:
-        raise InputError(f"--length must be > 0 m, got {length:g}")
+    if not 0.0 < length <= MAX_ROAD_LENGTH_M:
+        raise InputError(f"--length must be in (0, {MAX_ROAD_LENGTH_M:g}] m, got {length:g}")
     if not spacing > 0.0:
         raise InputError(f"--spacing must be > 0 m, got {spacing:g}")
     if spacing > MAX_SPACING_M:
         raise InputError(f"--spacing must be ≤ {MAX_SPACING_M} m to resolve 10 cycles/m, got {spacing:g}")
     if spacing > length / 16:
         raise InputError(f"--spacing {spacing:g} m is too coarse for a {length:g} m road (need ≥ 16 samples)")
+    if length / spacing + 1 > MAX_ROAD_SAMPLES:
+        raise InputError(
+            f"--length {length:g} m at --spacing {spacing:g} m is {length / spacing + 1:.3g} grid points, "
+            f"more than {MAX_ROAD_SAMPLES:,}: coarsen the spacing or shorten the road"
+        )
     if gd_n0 is not None and not 0.0 < gd_n0 < 1.0:
         raise InputError(f"--gd-n0 must be in (0, 1) m³, got {gd_n0:g}")
     if gd_n0 is not None and road_class is not None:

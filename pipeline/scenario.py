@@ -15,8 +15,6 @@ reported with its field path and allowed range.
 
 from __future__ import annotations
 
-import json
-import tomllib
 from pathlib import Path
 from typing import Literal
 
@@ -248,24 +246,10 @@ def parse_scenario(data: object, *, source: str = "scenario") -> Scenario:
 
 def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario file (.yaml, .yml, .toml or .json)."""
-    import yaml  # here: the short form of `suvtwin simulate` reads no file
+    from suvtwin.files import read_settings
 
     path = Path(path)
-    if not path.is_file():
-        raise InputError(f"scenario file {str(path)!r} does not exist")
-    text = path.read_text()
-    suffix = path.suffix.lower()
-    try:
-        if suffix == ".toml":
-            data = tomllib.loads(text)
-        elif suffix == ".json":
-            data = json.loads(text)
-        elif suffix in (".yaml", ".yml"):
-            data = yaml.safe_load(text)
-        else:
-            raise InputError(f"scenario file must be .yaml, .yml, .toml or .json, got {str(path)!r}")
-    except (tomllib.TOMLDecodeError, json.JSONDecodeError, yaml.YAMLError) as error:
-        raise InputError(f"scenario file {str(path)!r} is malformed: {error}".replace("\n", " ")) from None
+    data = read_settings(path, what="scenario file")
     if not isinstance(data, dict):
         raise InputError(f"scenario file {str(path)!r} must hold a mapping of fields")
     if isinstance(data.get("tire_file"), str):  # relative to the scenario file

@@ -17,9 +17,9 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from suvtwin.errors import InputError
+from suvtwin.errors import InputError, cut
 from suvtwin.roads.iso8608 import CLASSES, class_bounds, class_level, class_of_level
-from suvtwin.roads.limits import MAX_SPACING_M, MIN_RECOMMENDED_LENGTH_M
+from suvtwin.roads.limits import MAX_ROAD_LENGTH_M, MAX_ROAD_SAMPLES, MAX_SPACING_M, MIN_RECOMMENDED_LENGTH_M
 
 __all__ = [
     "MAX_SPACING_M",
@@ -145,6 +145,13 @@ class RoadSpec(BaseModel):
                     f"transition_m = {self.transition_m} m exceeds the shortest segment ({shortest:g} m)"
                 )
         total = self.length_m
+        if total > MAX_ROAD_LENGTH_M:
+            raise ValueError(f"the segments' total length {total:g} m exceeds {MAX_ROAD_LENGTH_M:g} m")
+        if total / self.spacing_m + 1 > MAX_ROAD_SAMPLES:
+            raise ValueError(
+                f"{total:g} m at spacing_m = {self.spacing_m:g} m is {total / self.spacing_m + 1:.3g} grid "
+                f"points, more than {MAX_ROAD_SAMPLES:,}: coarsen the spacing or shorten the road"
+            )
         for i, obstacle in enumerate(self.obstacles):
             if obstacle.position_m + obstacle.length_m > total:
                 raise ValueError(
@@ -178,9 +185,13 @@ def format_validation_error(error: ValidationError, *, prefix: str = "") -> str:
         if item["type"] == "extra_forbidden":
             message = "unknown field"
         elif item["type"] not in ("missing", "value_error"):
-            message = f"{message} (got {item.get('input')!r})"
-        lines.append(f"{path or '(top level)'}: {message}")
+            message = f"{message} (got {cut(repr(item.get('input')))})"
+        lines.append(f"{path or '(top level)'}: {cut(message)}")
+        if len(lines) == 20 and len(items) > 21:
+            lines.append(f"… and {len(items) - 20} more problems")
+            break
     return "; ".join(lines)
+
 
 
 def parse_road_spec(data: object) -> RoadSpec:

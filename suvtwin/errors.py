@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["InputError", "RunError", "positive"]
+__all__ = ["InputError", "RunError", "cut", "positive"]
 
 
 class InputError(ValueError):
@@ -32,3 +32,8 @@ def positive(name: str, value: object, unit: str) -> float:
     if not math.isfinite(number) or number <= 0.0:
         raise InputError(f"{name} must be a finite number > 0 {unit}, got {value!r}")
     return number
+
+
+def cut(text: str, limit: int = 200) -> str:
+    """`text` cut to `limit` characters (with "…" and its full length) for an error message."""
+    return text if len(text) <= limit else f"{text[:limit]}… ({len(text):,} characters)"

@@ -1,6 +1,7 @@
-"""Writing output files so that a failure never leaves a partial file.
+"""Reading input files safely and writing output files so that a failure never leaves a partial file.
 
-Usual call: ``atomic_write(path, lambda tmp: table_to_parquet(tmp))``.
+Usual calls: ``atomic_write(path, lambda tmp: table_to_parquet(tmp))``;
+``data = read_settings(path, what="scenario file")``.
 """
 
 from __future__ import annotations
@@ -11,12 +12,17 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from suvtwin.errors import InputError
+from suvtwin.errors import InputError, cut
 
 if TYPE_CHECKING:
     import pyarrow as pa
 
-__all__ = ["atomic_write", "package_versions", "read_parquet_table", "save_figure"]
+__all__ = ["MAX_SETTINGS_BYTES", "atomic_write", "package_versions", "read_parquet_table", "read_settings",
+           "save_figure"]
+
+MAX_SETTINGS_BYTES = 8_000_000
+"""Largest settings file (scenario, road description, campaign configuration) read, bytes: a
+scenario's longest series (a steering or speed table) at 1 kHz for an hour is well below."""
 
 
 def atomic_write(path: str | os.PathLike, write: Callable[[str], object]) -> None:
@@ -80,3 +86,53 @@ def package_versions(names: tuple[str, ...]) -> dict[str, str]:
         except metadata.PackageNotFoundError:
             out[name] = "unknown"
     return out
+
+
+def read_settings(path: str | os.PathLike, *, what: str) -> object:
+    """The mapping in a settings file (.yaml, .yml, .toml or .json), for validation by the caller.
+
+    Refused with :class:`InputError` naming `what` and the path: a missing file, one larger than
+    :data:`MAX_SETTINGS_BYTES`, an unknown suffix, malformed text, and YAML aliases (``*name``):
+    a settings file has no use for them, and nested ones expand exponentially ("billion laughs").
+    Parser messages are cut to a readable length.
+    """
+    import json
+    import tomllib
+
+    import yaml
+
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"{what}: file {str(path)!r} does not exist")
+    size = path.stat().st_size
+    if size > MAX_SETTINGS_BYTES:
+        raise InputError(f"{what}: {str(path)!r} is {size:,} bytes, more than {MAX_SETTINGS_BYTES:,}")
+    suffix = path.suffix.lower()
+    if suffix not in (".yaml", ".yml", ".toml", ".json"):
+        raise InputError(f"{what}: file must be .yaml, .yml, .toml or .json, got {str(path)!r}")
+    try:
+        text = path.read_text(encoding="utf-8")
+        if suffix == ".toml":
+            return tomllib.loads(text)
+        if suffix == ".json":
+            return json.loads(text)
+        return yaml.load(text, Loader=_no_alias_loader())  # noqa: S506 - a SafeLoader that refuses aliases
+    except (tomllib.TOMLDecodeError, json.JSONDecodeError, yaml.YAMLError, UnicodeDecodeError) as error:
+        message = cut(str(error).replace("\n", " "), 300)
+        raise InputError(f"{what}: {str(path)!r} is malformed: {message}") from None
+
+
+def _no_alias_loader():
+    import yaml
+
+    class NoAliasLoader(yaml.SafeLoader):
+        """yaml's SafeLoader that raises on an alias instead of composing it."""
+
+        def compose_node(self, parent, index):
+            if self.check_event(yaml.AliasEvent):
+                event = self.peek_event()
+                line = event.start_mark.line + 1 if event.start_mark else "?"
+                raise yaml.YAMLError(f"YAML aliases (*{event.anchor}, line {line}) are not accepted")
+            return super().compose_node(parent, index)
+
+    return NoAliasLoader
