@@ -177,3 +177,62 @@ def test_cli_road_estimate_bad_input_exits_2_and_writes_nothing(run, tmp_path, c
     assert main(["road-estimate", str(path), "--out", str(out), *extra]) == 2
     assert message.lower() in capsys.readouterr().err.lower()
     assert not out.exists()
+
+
+# --- the study, the report section and the campaign --------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def small_study():
+    from suvtwin.pipeline.road_estimation import mujoco_study
+
+    return mujoco_study([0], classes=("C",), mass_changes=(0.0,))
+
+
+def test_study_scores_one_cell_against_its_own_truth(small_study):
+    from suvtwin.estimators.road_estimation import error_std_percent
+
+    (row,) = small_study["table"]
+    assert row["class"] == "C" and row["paper"] == {"KF": 8.1, "MME&KF": 4.6}
+    for key in ("KF|known|raw", "KF|known|enveloped", "KF|known|raw_hp", "MME&KF|known|raw"):
+        assert np.isfinite(row[key]["mean"]) and row[key]["std"] == 0.0
+    assert "KF|unknown|raw" not in row and "quarter_car|KF|known|raw" not in row  # variants off
+    assert row["front_left_delta_m_kg"]["mean"] == 0.0
+    ex = small_study["example"]
+    assert len(ex["x_m"]) == len(ex["raw_m"]) == len(ex["KF_m"]) == len(ex["MME&KF_m"]) == 1000
+    # the example's KF error (every 10th sample) is the cell's error within sampling
+    err = error_std_percent(np.asarray(ex["raw_m"]), np.asarray(ex["KF_m"]))
+    assert err == pytest.approx(row["KF|known|raw"]["mean"], rel=0.05)
+
+
+def test_report_section_shows_the_papers_table_beside_ours(small_study, tmp_path):
+    from suvtwin.pipeline.report.page import _road_estimation_html
+
+    text = "\n".join(_road_estimation_html(json.loads(json.dumps(small_study))))
+    assert "Wang et al. 2017" in text and "<table>" in text and "data:image/png;base64," in text
+    row = small_study["table"][0]
+    assert f"{row['KF|known|raw']['mean']:.1f} ± 0.0" in text and ">8.1<" in text and ">4.6<" in text
+    assert " / ".join("".join(row["classes"][k]) for k in ("truth", "KF", "MME&KF")) in text
+
+
+def test_campaign_runs_the_study_on_request_and_caches_it(tmp_path, monkeypatch):
+    import suvtwin.pipeline.road_estimation as module
+    from suvtwin.pipeline.campaign import preset
+    from suvtwin.pipeline.campaign.execution import _road_estimation_study
+
+    assert preset("full").road_estimation_seeds == 3 and preset("quick").road_estimation_seeds == 0
+    assert _road_estimation_study(preset("quick"), tmp_path) == (None, False)
+    calls = []
+
+    def stand_in(seeds, **_):
+        calls.append(list(seeds))
+        return {"settings": {"seeds": list(seeds)}, "table": [], "example": None, "x": np.float64(1.5)}
+
+    monkeypatch.setattr(module, "mujoco_study", stand_in)
+    config = preset("quick", road_estimation_seeds=2)
+    study, made = _road_estimation_study(config, tmp_path)
+    assert made and calls == [[0, 1]] and study["x"] == 1.5
+    study2, made2 = _road_estimation_study(config, tmp_path)
+    assert not made2 and study2 == study and len(calls) == 1
+    with pytest.raises(InputError, match="road_estimation_seeds"):
+        preset("quick", road_estimation_seeds=-1)

@@ -66,6 +66,9 @@ class CampaignConfig(BaseModel):
     monitor_warning_runs: int = Field(default=100, ge=0, le=1000)
     """Deflation-warning runs (one tyre or all four 20 % below placard) of the monitor's study (set
     ``warning``); 0: none."""
+    road_estimation_seeds: int = Field(default=0, ge=0, le=20)
+    """Seeds of the road-profile study on the SUV (Wang et al. 2017's Table 2, 18 cells, 9 MuJoCo
+    runs per seed: :func:`suvtwin.pipeline.road_estimation.mujoco_study`); 0: none."""
 
     @model_validator(mode="after")
     def _known_names(self) -> CampaignConfig:
@@ -89,8 +92,9 @@ class CampaignConfig(BaseModel):
 def preset(name: str, **overrides) -> CampaignConfig:
     """The ``quick`` (40 Monte Carlo runs, GA 100 × 100, premise check 6 runs per class, monitor study
     2 slow leaks and 4 warning runs) or ``full`` (paper scale: 100 runs, GA 100 × 1000, premise check
-    25 runs per class, monitor study 20 slow leaks and 100 warning runs) campaign, with optional
-    field overrides (e.g. ``monte_carlo_runs=40``)."""
+    25 runs per class, monitor study 20 slow leaks and 100 warning runs, road-profile study 3 seeds)
+    campaign, with optional field overrides (e.g. ``monte_carlo_runs=40``,
+    ``road_estimation_seeds=3`` for the road-profile study in a quick campaign)."""
     presets = {
         "quick": {
             "name": "quick",
@@ -107,6 +111,7 @@ def preset(name: str, **overrides) -> CampaignConfig:
             "premise_runs_per_class": 25,
             "monitor_leak_runs": 20,
             "monitor_warning_runs": 100,
+            "road_estimation_seeds": 3,
         },
     }
     if name not in presets:
