@@ -486,8 +486,9 @@ def mujoco_study(
     enveloped heightfield under the tyre, and the same after :func:`highpass` at
     :data:`HIGHPASS_CUTOFF_CYCLES_PER_M` × speed (``_hp``); the class of the true and the
     estimated tracks; the front-left corner's measured share of Δm. `variants`: also the
-    unknown start and the same KF on its own linear quarter car (the corner's share of Δm)
-    driven by the same raw road. The first class, Δm and seed give ``example``: the true
+    unknown start, the same KF on its own linear quarter car (the corner's share of Δm)
+    driven by the same raw road, and the classes found by the KF with an unknown start and
+    by a KF told class C. The first class, Δm and seed give ``example``: the true
     and estimated road over the wheel's x (every 10th sample).
     """
     from suvtwin.estimators.road_estimation import error_std_percent, simulate_quarter_car
@@ -511,6 +512,8 @@ def mujoco_study(
         for dm in mass_changes:
             acc: dict[str, list] = {}
             found = {"truth": [], "KF": [], "MME&KF": []}
+            if variants:
+                found |= {"KF unknown start": [], "KF told C": []}
             weights, corner_dm = [], []
 
             def add(key, value, acc=acc):
@@ -555,11 +558,17 @@ def mujoco_study(
                         if label == "known":
                             found[name].append(_class_of(x, zh, s["grid_m"]))
                             estimates[name] = zh
+                        elif name == "KF":
+                            found["KF unknown start"].append(_class_of(x, zh, s["grid_m"]))
                 if example is None and len(estimates) == len(FILTERS):
                     step = 10
                     example = {"class": road_class, "delta_m_kg": dm, "seed": seed, "x_m": x[::step].tolist(),
                                "raw_m": raw[::step].tolist(), "enveloped_m": env[::step].tolist(),
                                **{f"{n}_m": z[::step].tolist() for n, z in estimates.items()}}
+                if variants:  # the class a KF told class C finds (known start)
+                    told = estimate_corner_road(tab, car, gd_n0=class_level("C"), corner=corner,
+                                                measurement_std=sigma, initial_road_m=raw[0])
+                    found["KF told C"].append(_class_of(x, told.road, s["grid_m"]))
                 if variants:  # the filter's own linear quarter car (corner share of Δm) on the same road
                     qc = car.with_sprung_mass(car.sprung_mass + corner_share * dm)
                     z0 = raw - raw[0]
