@@ -4,11 +4,16 @@ Usual call::
 
     table, meta = read_run("run.parquet")
     scenario = parse_scenario(meta["scenario"])
-    car = corner_quarter_car(load_vehicle(), load_tire(...), corner="fl", pressure_pa=250e3)
+    vehicle = load_vehicle()
+    car, sources = corner_quarter_car(vehicle, load_tire(vehicle.tire_file), corner="fl",
+                                      pressure_pa=250e3)
     truth = road_under_wheel(scenario, table, corner="fl")          # raw and enveloped
     est = estimate_corner_road(table, car, gd_n0=class_level("C"), corner="fl",
                                measurement_std=0.02, filter_name="KF")
     error_std_percent(truth.raw, est.road)
+
+``suvtwin road-estimate`` is :func:`estimate_run_road` (both tracks of an axle, written as a
+road file); the bench and the campaign's report run :func:`mujoco_study` (Table 2's 18 cells).
 
 The filter (:mod:`suvtwin.estimators.road_estimation`, which never imports MuJoCo) sees
 only the corner's two measured accelerations (``{c}_accel_sprung_mps2``: the chassis point
@@ -42,7 +47,7 @@ import numpy as np
 import numpy.typing as npt
 from scipy.signal import butter, sosfiltfilt
 
-from suvtwin.errors import InputError
+from suvtwin.errors import InputError, RunError
 from suvtwin.estimators.road_estimation import (
     QuarterCar,
     RoadEstimate,
@@ -414,8 +419,6 @@ def estimate_run_road(
         est = estimate_corner_road(table, car, gd_n0=gd, corner=corner, measurement_std=measurement_std,
                                    filter_name=filter_name)
         if not np.all(np.isfinite(est.road)):
-            from suvtwin.errors import RunError
-
             raise RunError(f"the {filter_name} diverged on corner {corner}")
         x, _ = wheel_path(table, vehicle, corner=corner)
         tracks += [x, est.road]
