@@ -282,6 +282,50 @@ def classify_command(
         )
 
 
+@app.command("road-estimate")
+def road_estimate_command(
+    run: Annotated[Path, typer.Argument(help="Run file (suvtwin simulate).")],
+    out: Annotated[
+        Path, typer.Option("--out", help="Output road file (Parquet: x_m, z_left_m, z_right_m in m), "
+                           "readable by `suvtwin classify`.")
+    ],
+    road_class: Annotated[
+        str, typer.Option("--class", help="ISO 8608 class (A-H) the filter's road model assumes.")
+    ] = "C",
+    filter_name: Annotated[
+        str, typer.Option("--filter", help="KF (Wang et al. 2017, eq. 10-15) or MME&KF (eq. 16-21).")
+    ] = "KF",
+    measurement_std: Annotated[
+        float | None,
+        typer.Option(help="Accelerometer noise the filter assumes, m/s^2 (> 0; default: the run's)."),
+    ] = None,
+    axle: Annotated[
+        str, typer.Option(help="Axle whose two corners give the left and right track: front, rear.")
+    ] = "front",
+    skip: Annotated[float, typer.Option(help="Leading seconds not used (the car settling), s (>= 0).")] = 2.0,
+    spacing: Annotated[
+        float, typer.Option(help="Grid spacing of the road file, m (0 < spacing <= 0.05).")
+    ] = 0.05,
+) -> None:
+    """Estimate the road under an axle's tyres from its corners' accelerometers (Wang et al. 2017)."""
+    from suvtwin.pipeline.road_estimation import FILTERS, estimate_run_road
+    from suvtwin.roads.profile import write_road
+
+    _check_out(out, "--out", (".parquet",))
+    if filter_name not in FILTERS:
+        raise InputError(f"--filter must be one of {', '.join(FILTERS)}, got {filter_name!r}")
+    if measurement_std is not None and not measurement_std > 0.0:
+        raise InputError(f"--measurement-std must be > 0 m/s^2, got {measurement_std:g}")
+    if not 0.0 < spacing <= MAX_SPACING_M:
+        raise InputError(f"--spacing must be in (0, {MAX_SPACING_M:g}] m, got {spacing:g}")
+    road, info = estimate_run_road(run, road_class=road_class, filter_name=filter_name,
+                                   measurement_std=measurement_std, axle=axle, skip_s=skip,
+                                   spacing_m=spacing)  # fmt: skip
+    write_road(road, out)
+    typer.echo(f"wrote {out} ({road.x.size} samples, {road.length_m:.1f} m; {filter_name}, "
+               f"class {road_class} road model, sigma {info['measurement_std_mps2']:g} m/s^2, {axle} axle)")
+
+
 @app.command("simulate")
 def simulate_command(
     out: Annotated[Path, typer.Option("--out", help="Output Parquet: one row per output sample, SI units.")],

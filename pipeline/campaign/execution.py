@@ -32,6 +32,7 @@ from suvtwin.pipeline.campaign.cache import (
     ESTIMATION_SOURCES,
     IDENTIFICATION_SOURCES,
     PREMISE_SOURCES,
+    SIMULATION_SOURCES,
     digest,
     model_fingerprint,
     remove_stale_temporaries,
@@ -351,6 +352,30 @@ def _monitor_study(config: CampaignConfig, out: Path, jobs: int) -> dict | None:
     return study
 
 
+ROAD_ESTIMATION_SOURCES = (*SIMULATION_SOURCES, "suvtwin.estimators.road_estimation",
+                           "suvtwin.pipeline.road_estimation", "suvtwin.roads")  # fmt: skip
+"""What the road-profile study is made by (besides its seeds)."""
+
+
+def _road_estimation_study(config: CampaignConfig, out: Path) -> tuple[dict | None, bool]:
+    """The road-profile study on the SUV (:func:`suvtwin.pipeline.road_estimation.mujoco_study`, Wang
+    et al. 2017's Table 2) with ``config.road_estimation_seeds`` seeds (None when 0), and whether it
+    was made now. Cached in ``road_estimation/study-<key>.json`` (key: seeds and code)."""
+    if config.road_estimation_seeds == 0:
+        return None, False
+    from suvtwin.pipeline.road_estimation import mujoco_study
+
+    seeds = list(range(config.road_estimation_seeds))
+    key = digest({"seeds": seeds, "model": model_fingerprint(ROAD_ESTIMATION_SOURCES)})
+    path = out / "road_estimation" / f"study-{key}.json"
+    made = not path.is_file()
+    if made:
+        text = json.dumps(_json_ready(mujoco_study(seeds)), indent=1)
+        path.parent.mkdir(exist_ok=True)
+        atomic_write(path, lambda tmp: Path(tmp).write_text(text))
+    return json.loads(path.read_text()), made
+
+
 def run_campaign(config: CampaignConfig, out: str | Path, *, jobs: int = 1, progress: bool = False) -> dict:
     """Run (or resume) the campaign in folder `out`; write metrics and the report there.
 
@@ -410,6 +435,14 @@ def run_campaign(config: CampaignConfig, out: str | Path, *, jobs: int = 1, prog
     t0 = time.perf_counter()
     input_estimation = _input_estimation_study(config, out)
     timings["input_estimation_s"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    road_estimation, timings["road_estimation_made"] = _road_estimation_study(config, out)
+    if road_estimation is not None:
+        text = json.dumps(road_estimation, indent=1)
+        atomic_write(out / "road_estimation.json", lambda tmp: Path(tmp).write_text(text))
+    else:
+        (out / "road_estimation.json").unlink(missing_ok=True)
+    timings["road_estimation_s"] = time.perf_counter() - t0
     summary = {
         "config": config.model_dump(mode="json"),
         "config_hash": digest(config.model_dump(mode="json")),
@@ -424,7 +457,8 @@ def run_campaign(config: CampaignConfig, out: str | Path, *, jobs: int = 1, prog
 
     t0 = time.perf_counter()
     write_report(out / "report.html", config, specs, metrics, mc_table, series, params_path, summary,
-                 premise=premise, monitor=monitor, input_estimation=input_estimation)  # fmt: skip
+                 premise=premise, monitor=monitor, input_estimation=input_estimation,
+                 road_estimation=road_estimation)  # fmt: skip
     timings["report_s"] = time.perf_counter() - t0
     timings["total_s"] = time.perf_counter() - started
     atomic_write(out / "campaign.json", lambda tmp: Path(tmp).write_text(json.dumps(summary, indent=2)))

@@ -16,7 +16,14 @@ import numpy as np
 
 from suvtwin.pipeline.estimator_registry import ESTIMATORS
 
-__all__ = ["draws_figure", "monitor_figure", "monte_carlo_figure", "road_psd_figure", "scenario_figure"]
+__all__ = [
+    "draws_figure",
+    "monitor_figure",
+    "monte_carlo_figure",
+    "road_estimate_figure",
+    "road_psd_figure",
+    "scenario_figure",
+]
 
 
 def _pyplot():
@@ -190,6 +197,31 @@ def monitor_figure(example: dict, title: str) -> str:
     ax.set_xlabel("time, s")
     ax.set_ylabel(f"pressure {example['tyre']}, kPa")
     ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=8, loc="best")
+    fig.tight_layout()
+    return _png(fig)
+
+
+def road_estimate_figure(example: dict) -> str:
+    """True vs estimated road under the front-left tyre (Wang et al. 2017 on the SUV), mm over the
+    wheel's x, m.
+
+    `example`: the road-estimation study's example (``x_m``, ``raw_m``, ``enveloped_m``,
+    ``KF_m``, ``MME&KF_m``, ``class``, ``delta_m_kg``, ``seed``;
+    :func:`suvtwin.pipeline.road_estimation.mujoco_study`)."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(9, 3.4))
+    x = np.asarray(example["x_m"], dtype=float)
+    raw = 1e3 * np.asarray(example["raw_m"])
+    ax.plot(x, raw, color="k", lw=1.4, label="heightfield under the tyre (raw)")
+    ax.plot(x, 1e3 * np.asarray(example["enveloped_m"]), color="0.5", lw=0.8, ls="--", label="enveloped")
+    for name, color in (("KF", "tab:blue"), ("MME&KF", "tab:orange")):
+        if f"{name}_m" in example:
+            ax.plot(x, 1e3 * np.asarray(example[f"{name}_m"]), color=color, lw=1.0, label=name)
+    ax.set_xlabel("distance x of the front-left wheel centre, m")
+    ax.set_ylabel("road elevation, mm")
+    ax.set_title(f"class {example['class']}, Δm = {example['delta_m_kg']:+.0f} kg, seed {example['seed']}",
+                 fontsize=10)
     ax.legend(fontsize=8, loc="best")
     fig.tight_layout()
     return _png(fig)

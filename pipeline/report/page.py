@@ -228,6 +228,51 @@ def _monitor_html(monitor: dict) -> list[str]:
     return parts
 
 
+def _road_estimation_html(study: dict) -> list[str]:
+    """The section on road-profile estimation (Wang et al. 2017) on the SUV: the paper's Table 2
+    beside ours, the classes of the estimated roads, and one true vs estimated road."""
+    from suvtwin.pipeline.report.figures import road_estimate_figure
+
+    settings = study.get("settings", {})
+
+    def cell(row, key):
+        v = row.get(key)
+        if isinstance(v, dict):
+            return f"{v['mean']:.1f} ± {v['std']:.1f}"
+        return "—" if v is None else str(v)
+
+    rows = []
+    for r in study.get("table", []):
+        paper = r.get("paper") or {}
+        classes = r.get("classes", {})
+        rows.append({
+            "class": r["class"], "Δm kg": f"{r['delta_m_kg']:+.0f}",
+            "front-left Δm kg": cell(r, "front_left_delta_m_kg"),
+            "paper KF": paper.get("KF", "—"), "ours KF": cell(r, "KF|known|raw"),
+            "KF vs enveloped": cell(r, "KF|known|enveloped"), "KF hp": cell(r, "KF|known|raw_hp"),
+            "paper MME&KF": paper.get("MME&KF", "—"), "ours MME&KF": cell(r, "MME&KF|known|raw"),
+            "MME&KF vs enveloped": cell(r, "MME&KF|known|enveloped"), "MME&KF hp": cell(r, "MME&KF|known|raw_hp"),
+            "class: truth / KF / MME&KF": " / ".join("".join(classes.get(k, [])) for k in ("truth", "KF", "MME&KF")),
+        })
+    parts = [
+        "<h2>Road-profile estimation on the SUV (Wang et al. 2017, KF and MME&amp;KF)</h2>",
+        "<p>The road under the front-left tyre estimated from its corner's two accelerometers "
+        f"({settings.get('speed_kmh', 40):g} km/h, σ = {settings.get('sigma_mps2', 0.02):g} m/s², seeds "
+        f"{html.escape(str(settings.get('seeds', [])))}; the filter's quarter car is the corner at nominal load, "
+        "the load change is in the simulated car only). Error STD % = 100·std(x̂<sub>r</sub> − x<sub>r</sub>)"
+        "/std(x<sub>r</sub>), the paper's metric, against the heightfield at the wheel centre (raw) and against "
+        "the tyre model's enveloped height; <b>hp</b>: the same after removing the road content below "
+        f"{settings.get('highpass_cycles_per_m', 0.05):g} cycles/m (zero-phase high-pass on truth and estimate), "
+        "where the absolute level, barely observable from accelerations, no longer counts. Classes: "
+        "<code>classify_profile</code> of the true and the estimated tracks, one letter per seed. "
+        "Method and findings: <code>docs/road_estimation.md</code>.</p>",
+        _table(pd.DataFrame(rows)),
+    ]
+    if study.get("example"):
+        parts.append(_img(road_estimate_figure(study["example"]), "true vs estimated road"))
+    return parts
+
+
 def write_report(
     path: str | Path,
     config,
@@ -241,11 +286,14 @@ def write_report(
     premise: pd.DataFrame | None = None,
     monitor: dict | None = None,
     input_estimation: dict | None = None,
+    road_estimation: dict | None = None,
 ) -> None:
     """Write the self-contained HTML report of a campaign (atomically); `premise`: the summary of
     paper 000's premise check (:func:`suvtwin.pipeline.premise.premise_summary`), or None;
     `monitor`: the online monitor's study (``monitor.json``), or None; `input_estimation`: paper
-    001's input-estimation study on the SUV (``input_estimation.json``), or None."""
+    001's input-estimation study on the SUV (``input_estimation.json``), or None; `road_estimation`:
+    the road-profile study on the SUV (``road_estimation.json``,
+    :func:`suvtwin.pipeline.road_estimation.mujoco_study`), or None."""
     from suvtwin.estimators.tire_pressure import PAPER_TABLE_3
     from suvtwin.mjcf.vehicle import load_vehicle
 
@@ -448,6 +496,9 @@ def write_report(
         from suvtwin.pipeline.report.input_estimation import input_estimation_html
 
         parts.extend(input_estimation_html(input_estimation))
+
+    if road_estimation:
+        parts.extend(_road_estimation_html(road_estimation))
 
     parts.append("<h2>8. Reproduce</h2>")
     timings = summary.get("timings", {})
