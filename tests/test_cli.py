@@ -92,8 +92,8 @@ def test_spec_file_with_segments_and_obstacles(tmp_path):
 
 BAD_ROAD_ARGS = [
     (["--class", "Z"], "--class must be one of A–H, got 'Z'"),
-    (["--class", "C", "--length", "0"], "--length must be > 0 m"),
-    (["--class", "C", "--length", "-5"], "--length must be > 0 m"),
+    (["--class", "C", "--length", "0"], "--length must be in (0, 200000] m"),
+    (["--class", "C", "--length", "-5"], "--length must be in (0, 200000] m"),
     (["--class", "C", "--spacing", "0"], "--spacing must be > 0 m"),
     (["--class", "C", "--spacing", "0.1"], "--spacing must be ≤ 0.05 m"),
     (["--class", "C", "--gd-n0", "1e-3"], "outside class C"),
