@@ -64,6 +64,11 @@ def _long_spec(path: Path) -> Path:
     return path
 
 
+ISSUE_CASES = {"alias_bomb_scenario", "alias_bomb_road_spec", "road_length_1e9", "road_spec_length_1e9"}
+"""The cases with issue 16's bound: peak memory under 300 MB. The others load the campaign or the whole
+scenario validation (pydantic, MuJoCo's vehicle model; numba compiling on a fresh clone) first and
+are held to 600 MB."""
+
 CASES = [
     # (id, argument builder (tmp -> args), words the message must hold)
     ("alias_bomb_scenario", lambda t: ["simulate", "--scenario", str(_alias_bomb(t / "s.yaml")),
@@ -97,5 +102,5 @@ def test_bad_input_is_refused_fast_in_bounded_memory_and_writes_nothing(tmp_path
         assert word in message, message
     assert len(message) < 2000  # a quoted value or a list of problems is cut
     assert wall < 10.0  # the issue asks < 2 s for the bomb and the length; start-up included here
-    assert peak_mb < 300.0, peak_mb
+    assert peak_mb < (300.0 if name in ISSUE_CASES else 600.0), peak_mb
     assert set(tmp_path.iterdir()) == before  # nothing written
