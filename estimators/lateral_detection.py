@@ -616,6 +616,7 @@ def detect_deflation(
     integral_weight: float,
     forgetting_rate: float,
     error_scale: tuple[float, float] = (1.0, 1.0),
+    sideslip: npt.ArrayLike | None = None,
     nominal: ArctanTire = NOMINAL_TIRE,
     deflated: ArctanTire = DEFLATED_TIRE,
 ) -> DetectionResult:
@@ -647,6 +648,9 @@ def detect_deflation(
     error_scale : (float, float), optional
         :math:`s_1` (m/s²) and :math:`s_2` (rad/s) dividing the two error components; the
         default (1, 1) is the paper's unweighted norm.
+    sideslip : array_like, (runs, steps) or (steps,), optional
+        β in rad from elsewhere (the paper's "state observers can also be utilized"); if
+        `None`, eq. 10's open-loop integral of the measurements.
     nominal, deflated : ArctanTire, optional
         The two tyre sets of the bank; default the paper's (Sec. IV).
 
@@ -679,7 +683,14 @@ def detect_deflation(
         raise InputError(f"error_scale must be two numbers > 0 (m/s², rad/s), got {error_scale!r}")
 
     v = vehicle
-    beta_meas = _cumtrapz(ay / vx - r, dt)  # eq. 10
+    if sideslip is None:
+        beta_meas = _cumtrapz(ay / vx - r, dt)  # eq. 10
+    else:
+        (beta_meas,) = _check_signals({"sideslip": sideslip})
+        try:
+            beta_meas = np.broadcast_to(beta_meas, delta.shape)
+        except ValueError as err:
+            raise InputError(f"sideslip must broadcast to {delta.shape}, got {np.shape(sideslip)}") from err
     fz = wheel_loads(ay, vehicle)[:, :, None, :]  # eq. 7, (runs, steps, 1, 4)
     alpha = slip_angles(delta, beta_meas, r, vx, vehicle)[:, :, None, :]  # eq. 8
     tires = bank_tires(nominal=nominal, deflated=deflated)  # (16, 4, 3)
