@@ -55,7 +55,7 @@ Errors and gaps of the paper handled here (and why)
   :math:`y = +T/2` moves forward at :math:`v_x - \dot\psi T/2` whatever the direction of the
   turn, which is eq. 8. Used: eq. 8 for both directions (eq. 9 would only hold with
   :math:`|\dot\psi|` in the denominators and a signed one in the numerators). The effect is
-  small (:math:`\dot\psi T/(2v_x)` ≈ 0.5 % of the slip at 120 km/h) but it breaks the mirror
+  small (:math:`\dot\psi T/v_x` ≈ 0.2 % of the slip in the paper's lane change) but it breaks the mirror
   symmetry of the model, which a test checks.
 - Eq. 5 writes :math:`-\dot\psi` (the *measured* yaw rate), not :math:`-\dot\psi_i`, in model
   i's sideslip equation, and Step 5 computes the slip angles from the measured yaw rate
