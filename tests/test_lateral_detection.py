@@ -209,3 +209,22 @@ def _zero_detect(**override):
 def test_bad_input_raises_input_error_naming_the_field(call, field):
     with pytest.raises(InputError, match=field):
         call()
+
+
+def test_given_sideslip_replaces_eq10():
+    """``sideslip=`` with eq. 10's own output changes nothing; with noise, the true β keeps model 8."""
+    t = np.arange(0.0, 8.0, DT)
+    steer = _lane_change(t)
+    sim = simulate_two_track(steer, SPEED, bank_tires(8), CAR, dt=DT)
+    rng = np.random.default_rng(0)
+    shape = sim.yaw_rate.shape
+    ay = sim.lateral_acceleration + 0.05 * rng.standard_normal(shape)  # m/s², the bench's ESC-grade noise
+    r = sim.yaw_rate + np.deg2rad(0.2) * rng.standard_normal(shape)  # rad/s
+    cost = dict(instant_weight=0.0, integral_weight=1.0, forgetting_rate=0.0)
+    own = detect_deflation(steer, SPEED, ay, r, CAR, dt=DT, **cost)
+    again = detect_deflation(steer, SPEED, ay, r, CAR, dt=DT, sideslip=own.measured_sideslip, **cost)
+    np.testing.assert_array_equal(again.cost, own.cost)
+    ideal = detect_deflation(steer, SPEED, ay, r, CAR, dt=DT, sideslip=sim.sideslip, **cost)
+    assert ideal.selected[0, -1] == 8
+    with pytest.raises(InputError, match="sideslip"):
+        detect_deflation(steer, SPEED, ay, r, CAR, dt=DT, sideslip=np.zeros(3), **cost)
