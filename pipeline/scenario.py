@@ -36,7 +36,7 @@ __all__ = [
     "quick_scenario",
 ]
 
-_MODEL = ConfigDict(frozen=True, extra="forbid", str_strip_whitespace=True)
+_MODEL = ConfigDict(frozen=True, extra="forbid", str_strip_whitespace=True, allow_inf_nan=False)
 _DEFAULT_TIRE = load_vehicle().tire
 PRESSURE_MIN_KPA = _DEFAULT_TIRE.pressure_min / 1e3
 PRESSURE_MAX_KPA = _DEFAULT_TIRE.pressure_max / 1e3
@@ -178,6 +178,17 @@ class Scenario(BaseModel):
                     f"pressure_events[{i}] ends at {event.end_s:g} s, "
                     f"after the run's end ({self.duration_s:g} s)"
                 )
+        # one tyre's events must not overlap: which pressure would it have in between?
+        for corner in CORNERS:
+            events = sorted(
+                (e.start_s, e.end_s, i) for i, e in enumerate(self.pressure_events) if e.tire == corner
+            )
+            for (_, end_a, i), (start_b, _, j) in zip(events, events[1:], strict=False):
+                if start_b < end_a:
+                    raise ValueError(
+                        f"pressure_events[{i}] and [{j}] overlap on tyre {corner} "
+                        f"({start_b:g} s < {end_a:g} s): one event per tyre at a time"
+                    )
         if not isinstance(self.speed_kmh, int | float) and self.speed_kmh[-1][0] > self.duration_s:
             raise ValueError("speed profile extends beyond duration_s")
         return self

@@ -70,6 +70,18 @@ class SimulationError(RunError):
     """The simulation diverged (non-finite state) or MuJoCo raised warnings."""
 
 
+def _mujoco_warning(message: str) -> None:
+    """MuJoCo's warnings as Python warnings: without a handler of the user's, MuJoCo appends them to
+    ``MUJOCO_LOG.TXT`` in the working folder (the user's). A diverging state is caught from the
+    warning counters (:func:`simulate`), not from here."""
+    import warnings
+
+    warnings.warn(f"MuJoCo: {message}", RuntimeWarning, stacklevel=2)
+
+
+mujoco.set_mju_user_warning(_mujoco_warning)
+
+
 def _output_columns() -> tuple[str, ...]:
     cols = list(GLOBAL_FIELDS)
     for c in CORNERS:

@@ -31,7 +31,7 @@ __all__ = [
     "parse_road_spec",
 ]
 
-_MODEL = ConfigDict(frozen=True, extra="forbid", str_strip_whitespace=True)
+_MODEL = ConfigDict(frozen=True, extra="forbid", str_strip_whitespace=True, allow_inf_nan=False)
 
 
 class SegmentSpec(BaseModel):

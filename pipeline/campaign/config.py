@@ -28,7 +28,7 @@ SCENARIOS: dict[str, str] = {
 }
 """Scenario runs of paper 000 §5.4, at 60 km/h, each road level drawn inside its class band."""
 
-_MODEL = ConfigDict(frozen=True, extra="forbid")
+_MODEL = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
 
 
 class IdentificationConfig(BaseModel):
