@@ -33,6 +33,7 @@ from suvtwin.suspension_law import SuspensionLaw
 
 __all__ = [
     "EstimateRun",
+    "check_signals",
     "check_time_axis",
     "corner_sprung_mass",
     "estimate_run",
@@ -72,14 +73,26 @@ def _load_run(path: str | Path, corner: str, *, gaps: bool = False) -> tuple[pd.
         bad = [c for c in checked if not np.all(np.isfinite(frame[c].to_numpy(dtype=float)))]
         raise InputError(f"run file {str(path)!r}: column(s) {', '.join(bad)} hold NaN or infinite values")
     dt = check_time_axis(frame["t_s"].to_numpy(dtype=float), path)
+    accelerations = {c: frame[c].to_numpy(dtype=float) for c in needed[2:]}
+    check_signals(frame["speed_mps"].to_numpy(dtype=float), accelerations, path, refuse_accel=not gaps)
     raw = (table.schema.metadata or {}).get(b"suvtwin.run")
     meta = json.loads(raw) if raw else {}
     return frame, meta, dt
 
 
+MIN_SAMPLE_INTERVAL_S, MAX_SAMPLE_INTERVAL_S = 1e-5, 0.05
+"""Sample intervals a measurement file may have, s (100 kHz to 20 Hz): time in ms or µs falls outside."""
+MAX_SPEED_MPS = 100.0
+"""Highest plausible vehicle speed in a measurement file, m/s (360 km/h)."""
+MAX_ACCEL_MPS2 = 1000.0
+"""Largest plausible accelerometer value, m/s² (~100 g): beyond it a sample is a fault. The batch
+estimators refuse such a file; the online monitor skips the windows with one (``implausible``)."""
+
+
 def check_time_axis(t: np.ndarray, path: str | Path) -> float:
     """The sample interval (s) of a run file's time axis `t_s`; refuses fewer than 10 samples, a
-    non-finite, non-increasing or non-uniform axis (one message naming the file)."""
+    non-finite, non-increasing or non-uniform axis, and an interval outside
+    :data:`MIN_SAMPLE_INTERVAL_S`–:data:`MAX_SAMPLE_INTERVAL_S` (one message naming the file)."""
     if t.size < 10:
         raise InputError(f"run file {str(path)!r}: needs at least 10 samples, got {t.size}")
     if not np.all(np.isfinite(t)):
@@ -89,7 +102,42 @@ def check_time_axis(t: np.ndarray, path: str | Path) -> float:
         raise InputError(f"run file {str(path)!r}: t_s must be strictly increasing")
     if np.ptp(step) > 1e-6 * np.mean(step) + 1e-12:
         raise InputError(f"run file {str(path)!r}: t_s must be uniformly sampled (mark missing samples NaN)")
-    return float(np.mean(step))
+    dt = float(np.mean(step))
+    if not MIN_SAMPLE_INTERVAL_S <= dt <= MAX_SAMPLE_INTERVAL_S:
+        raise InputError(
+            f"run file {str(path)!r}: t_s must be in seconds with a sample interval of "
+            f"{MIN_SAMPLE_INTERVAL_S:g}–{MAX_SAMPLE_INTERVAL_S:g} s (100 kHz–20 Hz), got {dt:g}: "
+            "time in ms or µs?"
+        )
+    return dt
+
+
+def check_signals(
+    speed: np.ndarray,
+    accelerations: dict[str, np.ndarray],
+    path: str | Path,
+    *,
+    refuse_accel: bool,
+    speed_gaps: bool = False,
+) -> None:
+    """Refuse a negative or implausible speed (> :data:`MAX_SPEED_MPS`; a NaN too unless
+    `speed_gaps`) and, with `refuse_accel`, accelerations beyond ±:data:`MAX_ACCEL_MPS2` (NaN
+    allowed: a gap)."""
+    v = np.asarray(speed, dtype=float)
+    bad = (v < 0.0) | (v > MAX_SPEED_MPS) | np.isinf(v) | (np.isnan(v) & (not speed_gaps))
+    if np.any(bad):
+        raise InputError(
+            f"run file {str(path)!r}: speed_mps must be within 0–{MAX_SPEED_MPS:g} m/s, got {v[bad][0]:g}"
+        )
+    if refuse_accel:
+        for name, a in accelerations.items():
+            a = np.asarray(a, dtype=float)
+            big = np.abs(a) > MAX_ACCEL_MPS2
+            if np.any(big):
+                raise InputError(
+                    f"run file {str(path)!r}: {name} holds {int(big.sum())} value(s) beyond "
+                    f"±{MAX_ACCEL_MPS2:g} m/s² (e.g. {a[big][0]:g}): a faulty sensor or the wrong unit"
+                )
 
 
 def estimate_run(
@@ -246,6 +294,9 @@ def score_estimate(estimate_path: str | Path, run_path: str | Path) -> dict:
     if truth_col not in frame:
         raise InputError(f"run file {str(run_path)!r} lacks {truth_col}: no true pressure to score against")
     table = est.to_pandas()
+    missing = [c for c in ("t_s", "pressure_hat_kpa", "pressure_sigma_kpa") if c not in table]
+    if missing:
+        raise InputError(f"estimate file {str(estimate_path)!r} lacks column(s) {', '.join(missing)}")
     if len(table) != len(frame) or not np.allclose(table["t_s"], frame["t_s"]):
         raise InputError(
             "estimate and run files have different time axes: was the estimate made from this run?"

@@ -26,6 +26,7 @@ from suvtwin.estimators.monitor import SKIP_REASONS, MonitorConfig, MonitorUpdat
 from suvtwin.files import atomic_write, read_parquet_table
 from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
 from suvtwin.pipeline.estimation import (
+    check_signals,
     check_time_axis,
     corner_sprung_mass,
     corner_static_travel,
@@ -138,6 +139,8 @@ def monitor_run(
     frame = table.select(needed).to_pandas()
     t = frame["t_s"].to_numpy(dtype=float)
     check_time_axis(t, path)
+    # a NaN speed is a gap the monitor skips; an accelerometer beyond range is flagged per window
+    check_signals(frame["speed_mps"].to_numpy(dtype=float), {}, path, refuse_accel=False, speed_gaps=True)
     if reset_at_s is not None and not (np.isfinite(reset_at_s) and t[0] <= reset_at_s <= t[-1]):
         raise InputError(f"--reset-at must lie within the run, {t[0]:g}–{t[-1]:g} s, got {reset_at_s}")
     raw = (table.schema.metadata or {}).get(b"suvtwin.run")

@@ -83,7 +83,7 @@ def run_metrics(
     """
     t, truth, estimate, sigma = (np.asarray(a, dtype=float) for a in (t, truth, estimate, sigma))
     error = estimate - truth
-    outside = np.abs(error) > tolerance
+    outside = ~(np.abs(error) <= tolerance)  # a NaN estimate is never within the tolerance
     if not outside.any():
         converge = float(t[0])
     elif outside[-1]:
@@ -93,10 +93,11 @@ def run_metrics(
     start = settle_s if settle_s is not None else (converge if np.isfinite(converge) else t[t.size // 2])
     keep = t >= start
     e, s = error[keep], sigma[keep]
+    finite = np.isfinite(e)  # the mean and RMSE of the samples with an estimate (NaN if none)
     return RunMetrics(
         time_to_converge_s=converge,
-        mean_error=float(e.mean()),
-        rmse=float(np.sqrt(np.mean(e**2))),
+        mean_error=float(e[finite].mean()) if finite.any() else float("nan"),
+        rmse=float(np.sqrt(np.mean(e[finite] ** 2))) if finite.any() else float("nan"),
         inside_1sigma=float(np.mean(np.abs(e) <= s)),
         inside_2sigma=float(np.mean(np.abs(e) <= 2 * s)),
     )

@@ -11,6 +11,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 _CHILD = """
@@ -88,12 +89,53 @@ pressure_events:
 _INF_SEGMENT = "segments:\n  - {length_m: .inf, road_class: C}\n"
 
 
+def _run_file(path: Path, *, dt: float = 1e-3, speed: float = 15.0, spike: float | None = None,
+              drop: str | None = None) -> Path:  # fmt: skip
+    """A small measurement file of all four corners (2 s, white noise), with one fault."""
+    import numpy as np
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    n = 2000
+    rng = np.random.default_rng(0)
+    cols = {"t_s": np.arange(n) * dt, "speed_mps": np.full(n, speed)}
+    for c in ("fl", "fr", "rl", "rr"):
+        cols[f"{c}_accel_sprung_mps2"] = rng.normal(0.0, 1.0, n)
+        cols[f"{c}_accel_unsprung_mps2"] = rng.normal(0.0, 10.0, n)
+        cols[f"{c}_pressure_kpa"] = np.full(n, 230.0)
+    if spike is not None:
+        cols["fl_accel_unsprung_mps2"][100] = spike
+    if drop is not None:
+        del cols[drop]
+    pq.write_table(pa.table(cols), path)
+    return path
+
+
+def _estimate(t: Path, **fault) -> list[str]:
+    run = _run_file(t / "run.parquet", **fault)
+    return ["estimate", str(run), "--corner", "fl", "--out", str(t / "e.parquet")]
+
+
+def _monitor(t: Path, **fault) -> list[str]:
+    return ["monitor", str(_run_file(t / "run.parquet", **fault)), "--out", str(t / "m.parquet")]
+
+
 def _simulate(t: Path, text: str) -> list[str]:
     return ["simulate", "--scenario", str(_text(t / "s.yaml", text)), "--out", str(t / "out.parquet")]
 
 
 CASES = [
     # (id, argument builder (tmp -> args), words the message must hold)
+    ("estimate_time_in_ms", lambda t: _estimate(t, dt=1.0), ["t_s", "time in ms"]),
+    ("estimate_time_in_us", lambda t: _estimate(t, dt=1000.0), ["t_s", "time in ms or µs"]),
+    ("estimate_negative_speed", lambda t: _estimate(t, speed=-15.0), ["speed_mps", "0–100 m/s"]),
+    ("estimate_accel_1e30", lambda t: _estimate(t, spike=1e30), ["fl_accel_unsprung_mps2", "1000"]),
+    ("estimate_missing_column", lambda t: _estimate(t, drop="fl_accel_sprung_mps2"),
+     ["fl_accel_sprung_mps2"]),
+    ("monitor_time_in_ms", lambda t: _monitor(t, dt=1.0), ["t_s", "time in ms"]),
+    ("monitor_negative_speed", lambda t: _monitor(t, speed=-15.0), ["speed_mps"]),
+    ("monitor_missing_column", lambda t: _monitor(t, drop="rr_accel_unsprung_mps2"),
+     ["rr_accel_unsprung_mps2"]),
     ("scenario_nan_in_steering_series", lambda t: _simulate(t, _NAN_STEER),
      ["steering.series[1][1]", "finite"]),
     ("scenario_infinite_lane_offset", lambda t: _simulate(t, _INF_LANE), ["steering.lane_y_m", "finite"]),
@@ -127,7 +169,7 @@ CASES = [
 @pytest.mark.parametrize(("name", "build", "words"), CASES, ids=[c[0] for c in CASES])
 def test_bad_input_is_refused_fast_in_bounded_memory_and_writes_nothing(tmp_path, name, build, words):
     args = build(tmp_path)
-    before = set(tmp_path.iterdir())
+    before = set(tmp_path.iterdir())  # the inputs the case made
     code, message, wall, peak_mb = _run(args, tmp_path)
     assert code == 2, message
     assert message.startswith("suvtwin: error:") and message.count("\n") == 0, message
@@ -166,3 +208,32 @@ def test_mujoco_warnings_become_python_warnings_not_a_log_in_the_working_folder(
                           capture_output=True, text=True)  # fmt: skip
     assert int(done.stdout.strip()) >= 1  # the bad QPOS warning, as a Python warning
     assert not (ours / "MUJOCO_LOG.TXT").exists()
+
+
+def test_score_never_counts_a_nan_estimate_as_converged(tmp_path):
+    from suvtwin.pipeline.scoring import run_metrics
+
+    t = np.arange(100) * 0.1
+    m = run_metrics(t, np.full(100, 230.0), np.full(100, np.nan), np.full(100, 5.0), tolerance=12.5)
+    assert np.isnan(m.time_to_converge_s) and m.inside_1sigma == 0.0 and m.inside_2sigma == 0.0
+    # NaN at the end: not converged, even though the earlier samples were within the tolerance
+    estimate = np.full(100, 231.0)
+    estimate[-5:] = np.nan
+    late_nan = run_metrics(t, np.full(100, 230.0), estimate, np.full(100, 5.0), tolerance=12.5)
+    assert np.isnan(late_nan.time_to_converge_s)
+
+
+def test_score_names_the_missing_columns_of_an_estimate_file(tmp_path):
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    run = _run_file(tmp_path / "run.parquet")
+    code, message, _, _ = _run(["estimate", str(run), "--corner", "fl", "--out", str(tmp_path / "e.parquet")],
+                               tmp_path)  # fmt: skip
+    assert code == 0, message
+    table = pq.read_table(tmp_path / "e.parquet")
+    pq.write_table(table.drop(["pressure_sigma_kpa"]).replace_schema_metadata(table.schema.metadata),
+                   tmp_path / "bad.parquet")  # fmt: skip
+    code, message, _, _ = _run(["score", str(tmp_path / "bad.parquet"), str(run)], tmp_path)
+    assert code == 2 and "pressure_sigma_kpa" in message, message
+    _ = pa  # pyarrow is needed to write the file
