@@ -81,10 +81,39 @@ def _import_mujoco_without_gl() -> None:
 
 
 def _check_out(path: Path, option: str, suffixes: tuple[str, ...]) -> None:
+    """Before any work: the output file's suffix, its folder exists and takes a new file (tried), and
+    the path is not a folder."""
     if path.suffix.lower() not in suffixes:
         raise InputError(f"{option} must end in {' or '.join(suffixes)}, got {str(path)!r}")
+    if path.is_dir():
+        raise InputError(f"{option}: {str(path)!r} is a folder, give a file name")
     if not path.parent.is_dir():
         raise InputError(f"{option}: folder {str(path.parent)!r} does not exist")
+    _check_writable(path.parent, option)
+
+
+def _check_out_folder(path: Path, option: str) -> None:
+    """Before any work: the output folder exists or can be made, is not a file and takes a new file."""
+    if path.exists() and not path.is_dir():
+        raise InputError(f"{option}: {str(path)!r} is a file, give a folder")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise InputError(f"{option}: cannot make folder {str(path)!r}: {error.strerror or error}") from None
+    _check_writable(path, option)
+
+
+def _check_writable(folder: Path, option: str) -> None:
+    """Create and remove a file in `folder` (the only test that a read-only mount, a full disk's
+    quota or a pseudo-filesystem cannot pass by permission bits alone)."""
+    import tempfile
+
+    try:
+        with tempfile.NamedTemporaryFile(dir=folder, prefix=".suvtwin-write-test-"):
+            pass
+    except OSError as error:
+        reason = error.strerror or error
+        raise InputError(f"{option}: cannot write in folder {str(folder)!r}: {reason}") from None
 
 
 def _load_mapping(path: Path, option: str) -> object:
@@ -701,6 +730,7 @@ def run_command(
     overrides.update({k: v for k, v in {"monte_carlo_runs": runs, "seed": seed, "params_file": params}.items()
                       if v is not None})  # fmt: skip
     config = preset("quick" if quick else "full", **overrides)
+    _check_out_folder(out, "--out")
     started = time.perf_counter()
     summary = run_campaign(config, out, jobs=jobs, progress=progress)
     t = summary["timings"]
@@ -736,6 +766,10 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         typer.echo("suvtwin: interrupted (finished work is kept; run the command again to resume)", err=True)
         return 130
+    except OSError as error:  # a disk that fills up or a file that vanishes mid-run: earlier files are kept
+        where = f" ({error.filename})" if getattr(error, "filename", None) else ""
+        typer.echo(f"suvtwin: error: {error.strerror or error}{where}", err=True)
+        return 1
     except SystemExit as done:
         if done.code is None or isinstance(done.code, int):
             return done.code or 0

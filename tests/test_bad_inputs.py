@@ -124,8 +124,21 @@ def _simulate(t: Path, text: str) -> list[str]:
     return ["simulate", "--scenario", str(_text(t / "s.yaml", text)), "--out", str(t / "out.parquet")]
 
 
+def _folder(path: Path) -> Path:
+    path.mkdir()
+    return path
+
+
 CASES = [
     # (id, argument builder (tmp -> args), words the message must hold)
+    ("out_is_a_folder", lambda t: ["road", "--class", "C", "--out", str(_folder(t / "road.parquet"))],
+     ["is a folder"]),
+    ("out_under_proc", lambda t: ["road", "--class", "C", "--out", "/proc/self/road.parquet"],
+     ["cannot write in folder", "/proc/self"]),
+    ("campaign_out_is_a_file", lambda t: ["run", "--quick", "--out", str(_text(t / "results", "x"))],
+     ["is a file"]),
+    ("campaign_out_under_proc", lambda t: ["run", "--quick", "--out", "/proc/suvtwin-results"],
+     ["cannot make folder"]),
     ("estimate_time_in_ms", lambda t: _estimate(t, dt=1.0), ["t_s", "time in ms"]),
     ("estimate_time_in_us", lambda t: _estimate(t, dt=1000.0), ["t_s", "time in ms or µs"]),
     ("estimate_negative_speed", lambda t: _estimate(t, speed=-15.0), ["speed_mps", "0–100 m/s"]),
@@ -237,3 +250,30 @@ def test_score_names_the_missing_columns_of_an_estimate_file(tmp_path):
     code, message, _, _ = _run(["score", str(tmp_path / "bad.parquet"), str(run)], tmp_path)
     assert code == 2 and "pressure_sigma_kpa" in message, message
     _ = pa  # pyarrow is needed to write the file
+
+
+def test_a_write_that_fails_midway_is_one_message_and_keeps_the_earlier_file(tmp_path, monkeypatch, capsys):
+    # a full disk while the Parquet file is written: exit 1, one line, the earlier road file untouched,
+    # no temporary file left
+    import errno
+
+    import pyarrow.parquet as pq
+
+    from suvtwin.pipeline.cli import main
+
+    out = tmp_path / "road.parquet"
+    assert main(["road", "--class", "C", "--length", "200", "--out", str(out)]) == 0
+    before = out.read_bytes()
+    real = pq.write_table
+
+    def full_disk(table, where, *args, **kwargs):
+        real(table.slice(0, 10), where, *args, **kwargs)  # part of it lands, then the disk is full
+        raise OSError(errno.ENOSPC, "No space left on device", str(where))
+
+    monkeypatch.setattr(pq, "write_table", full_disk)
+    capsys.readouterr()
+    assert main(["road", "--class", "C", "--length", "200", "--seed", "5", "--out", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("suvtwin: error: No space left on device") and err.count("\n") == 1, err
+    assert out.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["road.parquet"]
