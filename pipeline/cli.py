@@ -746,6 +746,9 @@ def run_command(
     if (out / "input_estimation.json").is_file():
         typer.echo(f"paper 001's input estimation on the SUV ({t['input_estimation_s']:.0f} s): "
                    f"{out / 'input_estimation.json'}")  # fmt: skip
+    if (out / "road_estimation.json").is_file():
+        typer.echo(f"paper 002's road-profile estimation on the SUV ({t['road_estimation_s']:.0f} s): "
+                   f"{out / 'road_estimation.json'}")  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:
