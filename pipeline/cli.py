@@ -343,6 +343,10 @@ def road_estimate_command(
     _check_out(out, "--out", (".parquet",))
     if filter_name not in FILTERS:
         raise InputError(f"--filter must be one of {', '.join(FILTERS)}, got {filter_name!r}")
+    if road_class.strip().upper() not in tuple("ABCDEFGH"):
+        raise InputError(f"--class must be one of A–H, got {road_class!r}")
+    if axle not in ("front", "rear"):
+        raise InputError(f"--axle must be front or rear, got {axle!r}")
     if measurement_std is not None and not measurement_std > 0.0:
         raise InputError(f"--measurement-std must be > 0 m/s^2, got {measurement_std:g}")
     if not 0.0 < spacing <= MAX_SPACING_M:
@@ -445,6 +449,8 @@ def render_command(
     _check_out(out, "--out", (".mp4",))
     if not 1 <= fps <= 120:
         raise InputError(f"--fps must be in [1, 120], got {fps}")
+    if camera not in ("chase", "side"):
+        raise InputError(f"--camera must be chase or side, got {camera!r}")
     if not (64 <= width <= 1280 and 64 <= height <= 720):
         raise InputError(f"--width/--height must be in [64, 1280] x [64, 720] pixels, got {width} x {height}")
     from suvtwin.pipeline.render import render_run
