@@ -165,10 +165,10 @@ def test_cli_road_estimate_writes_a_road_that_classify_reads(run, tmp_path, caps
 
 
 @pytest.mark.parametrize(("extra", "message"), [
-    (["--class", "Z"], "road class"),
+    (["--class", "Z"], "--class must be one of A–H"),
     (["--filter", "UKF"], "--filter must be one of"),
     (["--measurement-std", "0"], "--measurement-std"),
-    (["--axle", "middle"], "axle must be"),
+    (["--axle", "middle"], "--axle must be front or rear"),
     (["--skip", "100"], "skip_s"),
 ])
 def test_cli_road_estimate_bad_input_exits_2_and_writes_nothing(run, tmp_path, capsys, extra, message):
