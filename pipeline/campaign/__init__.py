@@ -20,7 +20,8 @@ Stages, in order (Brancati & Tufano 2022, §5.2–5.4):
    :mod:`suvtwin.pipeline.report` writes ``report.html``.
 
 Modules: :mod:`.config` (settings and presets), :mod:`.runs` (run specs and draws),
-:mod:`.cache` (content-addressed files, atomic writes, stale temporaries), :mod:`.execution`
+:mod:`.cache` (content-addressed files, atomic writes with a SHA-256 record checked on reuse,
+stale temporaries, the folder lock), :mod:`.execution`
 (process pool, stages, :func:`run_campaign`), :mod:`.metrics` (scoring).
 """
 

@@ -76,6 +76,13 @@ class CampaignConfig(BaseModel):
 
     @model_validator(mode="after")
     def _known_names(self) -> CampaignConfig:
+        if self.monte_carlo_runs == 0 and not self.scenarios:
+            raise ValueError(
+                "nothing to run: monte_carlo_runs is 0 and scenarios is empty; give monte_carlo_runs ≥ 1 "
+                f"or scenarios among {', '.join(SCENARIOS)}"
+            )
+        if not self.estimators:
+            raise ValueError(f"estimators is empty: give at least one of {', '.join(ESTIMATORS)}")
         for name in self.scenarios:
             if name not in SCENARIOS:
                 raise ValueError(f"unknown scenario {name!r}; allowed: {', '.join(SCENARIOS)}")

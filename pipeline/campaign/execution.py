@@ -13,7 +13,10 @@ Every unit of work is a file of the content-addressed cache
 (:mod:`suvtwin.pipeline.campaign.cache`), so a re-run reuses finished work and an interrupted
 run resumes where it stopped. Each estimate depends on its own run only (per-run seeds; the
 batched filters are independent across the batch), so a resumed campaign gives the same bytes
-as an uninterrupted one.
+as an uninterrupted one. A cached file is verified before it is reused (its recorded SHA-256:
+:func:`~suvtwin.pipeline.campaign.cache.verify_cached`); a damaged one is reported and made
+again. One process works in a campaign folder at a time
+(:func:`~suvtwin.pipeline.campaign.cache.campaign_lock`).
 """
 
 from __future__ import annotations
@@ -33,9 +36,16 @@ from suvtwin.pipeline.campaign.cache import (
     IDENTIFICATION_SOURCES,
     PREMISE_SOURCES,
     SIMULATION_SOURCES,
+    campaign_lock,
     digest,
+    drop_inherited_lock,
+    lock_identity,
     model_fingerprint,
+    record_digest,
     remove_stale_temporaries,
+    sidecar,
+    verify_cached,
+    write_cached,
 )
 from suvtwin.pipeline.campaign.config import CampaignConfig
 from suvtwin.pipeline.campaign.metrics import score_campaign
@@ -56,7 +66,8 @@ def _simulate_to(args: tuple[dict, str]) -> str:
     from suvtwin.pipeline.simulator import simulate, write_run
 
     scenario, path = args
-    write_run(simulate(parse_scenario(scenario, source="campaign scenario")), path)
+    result = simulate(parse_scenario(scenario, source="campaign scenario"))
+    write_cached(path, lambda tmp: write_run(result, tmp))
     return path
 
 
@@ -96,16 +107,21 @@ def _estimate_to(args: tuple) -> list[str]:
     batch = ESTIMATORS[estimator].run(signals)
     for b, out in enumerate(out_paths):
         table = pd.DataFrame(estimate_columns(batch, b, data[b]["t"]))
-        atomic_write(out, lambda tmp, table=table: table.to_parquet(tmp, index=False, compression="zstd"))
+        write_cached(out, lambda tmp, table=table: table.to_parquet(tmp, index=False, compression="zstd"))
     return out_paths
 
 
 # ---------------------------------------------------------------- orchestration
 class _Pool:
-    """A process pool of `jobs` workers, or the calling process for ``jobs == 1``."""
+    """A process pool of `jobs` workers, or the calling process for ``jobs == 1``. `lock`: the
+    campaign lock's identity (:func:`~suvtwin.pipeline.campaign.cache.lock_identity`), which forked
+    workers let go of, so that workers orphaned by a killed parent never hold the folder."""
 
-    def __init__(self, jobs: int):
-        self.executor = ProcessPoolExecutor(max_workers=jobs) if jobs > 1 else None
+    def __init__(self, jobs: int, lock: tuple[int, int, int] | None = None):
+        self.executor = None
+        if jobs > 1:
+            self.executor = ProcessPoolExecutor(max_workers=jobs, initializer=drop_inherited_lock,
+                                                initargs=(lock,))  # fmt: skip
 
     def run(self, fn, tasks: list, *, desc: str, total: int | None, unit: str, progress: bool) -> None:
         """Run ``fn(task)`` for every task; the bar advances by ``len(result)`` or 1 per task."""
@@ -167,11 +183,11 @@ def _identification(config: CampaignConfig, out: Path, pool: _Pool, progress: bo
     )
     folder = out / "identification" / key
     path = folder / "params.json"
-    if path.is_file():
+    if verify_cached(path):
         return path, {"source": str(path), "cached": True, "wall_time_s": 0.0, "key": key}
     folder.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
-    todo = [c for c in ident.classes if not (folder / f"class_{c}.json").is_file()]
+    todo = [c for c in ident.classes if not verify_cached(folder / f"class_{c}.json")]
     tasks = [(c, ident.model_dump(), config.corner, progress, i, str(folder)) for i, c in enumerate(todo)]
     pool.run(_identify_class_to, tasks, desc="identification", total=len(tasks), unit="class", progress=False)
     results = []
@@ -180,6 +196,7 @@ def _identification(config: CampaignConfig, out: Path, pool: _Pool, progress: bo
         results.append((c, part["parameters"], part["information"]))
     content = parameter_file_content(results, pop_size=ident.pop_size, n_gen=ident.n_gen, seed=ident.seed)
     write_parameter_file(content, path)
+    record_digest(path)  # killed before this: read in full when next reused, then recorded
     wall = time.perf_counter() - started
     return path, {"source": str(path), "cached": False, "wall_time_s": wall, "key": key, "classes_run": todo}
 
@@ -193,7 +210,7 @@ def _identify_class_to(args: tuple) -> str:
     )  # fmt: skip
     text = json.dumps({"parameters": parameters, "information": information}, indent=1)
     path = Path(folder) / f"class_{road_class}.json"
-    atomic_write(path, lambda tmp: Path(tmp).write_text(text))
+    write_cached(path, lambda tmp: Path(tmp).write_text(text))
     return str(path)
 
 
@@ -204,7 +221,7 @@ def _simulation(specs: list[RunSpec], fingerprint: dict, out: Path, pool: _Pool,
     runs_dir = out / "runs"
     runs_dir.mkdir(exist_ok=True)
     run_paths = {s.name: runs_dir / f"{s.name}-{s.key(fingerprint)}.parquet" for s in specs}
-    todo = [(s.scenario, str(run_paths[s.name])) for s in specs if not run_paths[s.name].is_file()]
+    todo = [(s.scenario, str(run_paths[s.name])) for s in specs if not verify_cached(run_paths[s.name])]
     pool.run(_simulate_to, todo, desc="ground truth", total=len(todo), unit="run", progress=progress)
     return run_paths, len(todo)
 
@@ -236,7 +253,7 @@ def _estimation(
             key = digest({"run": run_paths[s.name].name, "initial": s.initial_pressure_kpa})
             path = folder / f"{s.name}-{key}.parquet"
             est_paths[(estimator, s.name)] = path
-            if not path.is_file():
+            if not verify_cached(path):
                 missing.append(s)
         for i in range(0, len(missing), config.chunk_size):
             chunk = missing[i : i + config.chunk_size]
@@ -269,11 +286,11 @@ def _premise(config: CampaignConfig, out: Path):
          "model": model_fingerprint(PREMISE_SOURCES)}
     )  # fmt: skip
     path = out / "premise" / f"runs-{key}.csv"
-    made = not path.is_file()
+    made = not verify_cached(path)
     if made:
         runs = premise_study(config.premise_runs_per_class, seed=config.seed)
         path.parent.mkdir(exist_ok=True)
-        atomic_write(path, lambda tmp: runs.to_csv(tmp, index=False, float_format="%.6g"))
+        write_cached(path, lambda tmp: runs.to_csv(tmp, index=False, float_format="%.6g"))
     return premise_summary(pd.read_csv(path)), made
 
 
@@ -319,15 +336,26 @@ def _monitor_study(config: CampaignConfig, out: Path, jobs: int) -> dict | None:
     sets = [("slow_leak", config.monitor_leak_runs), ("warning", config.monitor_warning_runs)]
     if not any(n for _, n in sets):
         return None
-    from suvtwin.pipeline.monitor_scenarios import monitor_traces, scenario_set, simulate_cached
+    from suvtwin.pipeline.monitor_scenarios import monitor_traces, run_key, scenario_set, simulate_cached
     from suvtwin.pipeline.monitor_scoring import issue_targets, score_set
 
     study: dict = {}
+    fingerprint = model_fingerprint()
     for name, n in sets:
         if n == 0:
             continue
         runs = scenario_set(name, n)
-        paths, simulation = simulate_cached(runs, out / "monitor" / name, jobs=jobs)
+        folder = out / "monitor" / name
+        # simulate_cached writes <run key>.parquet (or <run key>.failed.json) without records: check
+        # what it will reuse here, and record what it made
+        for r in runs:
+            key = run_key(r.scenario, fingerprint)
+            verify_cached(folder / f"{key}.parquet")
+            verify_cached(folder / f"{key}.failed.json")
+        paths, simulation = simulate_cached(runs, folder, jobs=jobs)
+        for path in paths:
+            if path is not None and not sidecar(path).is_file():
+                record_digest(path)
         kept = [(r, p) for r, p in zip(runs, paths, strict=True) if p is not None]
         traces, _, cost = monitor_traces([r for r, _ in kept], [p for _, p in kept], jobs=jobs)
         done = [(r, t) for (r, _), t in zip(kept, traces, strict=True) if t is not None]
@@ -368,11 +396,11 @@ def _road_estimation_study(config: CampaignConfig, out: Path) -> tuple[dict | No
     seeds = list(range(config.road_estimation_seeds))
     key = digest({"seeds": seeds, "model": model_fingerprint(ROAD_ESTIMATION_SOURCES)})
     path = out / "road_estimation" / f"study-{key}.json"
-    made = not path.is_file()
+    made = not verify_cached(path)
     if made:
         text = json.dumps(_json_ready(mujoco_study(seeds)), indent=1)
         path.parent.mkdir(exist_ok=True)
-        atomic_write(path, lambda tmp: Path(tmp).write_text(text))
+        write_cached(path, lambda tmp: Path(tmp).write_text(text))
     return json.loads(path.read_text()), made
 
 
@@ -380,7 +408,8 @@ def run_campaign(config: CampaignConfig, out: str | Path, *, jobs: int = 1, prog
     """Run (or resume) the campaign in folder `out`; write metrics and the report there.
 
     Returns the summary written to ``out/campaign.json`` (configuration, its hash, stage
-    wall times, file names).
+    wall times, file names). One process at a time works in `out`: another one running there
+    raises :class:`~suvtwin.errors.InputError` naming it, before anything is written or removed.
     """
     if jobs < 1:
         raise InputError(f"--jobs must be ≥ 1, got {jobs}")
@@ -388,12 +417,19 @@ def run_campaign(config: CampaignConfig, out: str | Path, *, jobs: int = 1, prog
     if out.exists() and not out.is_dir():
         raise InputError(f"--out {str(out)!r} exists and is not a folder")
     out.mkdir(parents=True, exist_ok=True)
-    remove_stale_temporaries(out)
+    with campaign_lock(out) as lock:
+        remove_stale_temporaries(out)
+        return _run_locked(config, out, jobs, progress, lock_identity(lock))
+
+
+def _run_locked(config: CampaignConfig, out: Path, jobs: int, progress: bool,
+                lock: tuple[int, int, int] | None) -> dict:  # fmt: skip
+    """:func:`run_campaign` once the folder is held."""
     started = time.perf_counter()
     timings: dict[str, float] = {}
     fingerprint = model_fingerprint()
     specs = campaign_specs(config)
-    pool = _Pool(jobs)
+    pool = _Pool(jobs, lock)
     try:
         t0 = time.perf_counter()
         params_path, ident_info = _identification(config, out, pool, progress)
