@@ -118,6 +118,17 @@ def _bank(table: dict, source: str) -> ModeBank:
         raise InputError(
             f"mode parameters ({source}): each class needs numbers cs, csnl, ks, ksnl ({error})"
         ) from None
+    unknown = [c for c in classes if c not in tuple("ABCDEFGH")]
+    if unknown:
+        raise InputError(f"mode parameters ({source}): classes must be among A–H, got {', '.join(unknown)}")
+    for name, values in cols.items():
+        nonlinear = name.endswith("nl")  # the linear rates must be > 0, the non-linear terms ≥ 0
+        for c, value in zip(classes, values, strict=True):
+            if not np.isfinite(value) or value < 0.0 or (value == 0.0 and not nonlinear):
+                allowed = "finite and ≥ 0" if nonlinear else "finite and > 0"
+                raise InputError(
+                    f"mode parameters ({source}): classes.{c}.{name} must be {allowed}, got {float(value)!r}"
+                )
     return ModeBank(classes=classes, source=source, **cols)
 
 

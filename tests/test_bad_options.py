@@ -54,6 +54,19 @@ def _garbage(folder: Path, name: str = "run.parquet") -> Path:
     return path
 
 
+def _params(folder: Path, road_class: str, name: str, value: float) -> Path:
+    """The shipped mode-parameter file with one value changed."""
+    import json
+
+    from suvtwin.estimators.tire_pressure import IDENTIFIED_FILE
+
+    data = json.loads(IDENTIFIED_FILE.read_text())
+    data["classes"][road_class][name] = value
+    path = folder / "params.json"
+    path.write_text(json.dumps(data))  # NaN as JSON's NaN extension, as Python writes it
+    return path
+
+
 OUT = "out.parquet"
 _SHORT = ["simulate", "--road-class", "C", "--speed", "60", "--pressure", "230", "--duration", "2"]
 
@@ -116,6 +129,8 @@ CASES = [
      ["run.parquet"]),
     ("estimate_run_missing", lambda d: ["estimate", "none.parquet", "--corner", "fl", "--out", OUT],
      ["none.parquet"]),
+    ("estimate_params_nan", lambda d: ["estimate", str(_run_file(d)), "--corner", "fl", "--estimator", "imm", "--params", str(_params(d, "B", "ks", float("nan"))), "--out", OUT], ["classes.B.ks", "finite"]),
+    ("estimate_params_negative", lambda d: ["estimate", str(_run_file(d)), "--corner", "fl", "--estimator", "imm", "--params", str(_params(d, "C", "cs", -5.0)), "--out", OUT], ["classes.C.cs", "> 0"]),
     # monitor
     ("monitor_placard", lambda d: ["monitor", str(_run_file(d)), "--out", OUT, "--placard", "10"], ["--placard"]),
     ("monitor_placard_and_reset", lambda d: ["monitor", str(_run_file(d)), "--out", OUT, "--placard", "230",
