@@ -161,8 +161,8 @@ def road_command(
     spec: Annotated[
         Path | None,
         typer.Option(
-            help="Road description file (.yaml/.toml/.json, ≤ 8 MB, no YAML aliases: segments, obstacles, …); "
-            "replaces --class/--gd-n0/--length/--waviness/--method/--tracks/--spacing."
+            help="Road description file (.yaml/.toml/.json, ≤ 8 MB, no YAML aliases: segments, "
+            "obstacles, …); replaces --class/--gd-n0/--length/--waviness/--method/--tracks/--spacing."
         ),
     ] = None,
     plot: Annotated[
@@ -364,7 +364,9 @@ def simulate_command(
     out: Annotated[Path, typer.Option("--out", help="Output Parquet: one row per output sample, SI units.")],
     scenario: Annotated[
         Path | None,
-        typer.Option(help="Scenario file (.yaml/.toml/.json, ≤ 8 MB, no YAML aliases); or use the short form below."),
+        typer.Option(
+            help="Scenario file (.yaml/.toml/.json, ≤ 8 MB, no YAML aliases); or use the short form below."
+        ),
     ] = None,
     road_class: Annotated[
         str | None, typer.Option("--road-class", help="Short form: ISO 8608 class A–H of a straight road.")
@@ -711,8 +713,9 @@ def run_command(
         Path | None,
         typer.Option(
             "--config",
-            help="Campaign settings file (.yaml/.toml/.json, ≤ 8 MB, no YAML aliases) overriding the preset: monte_carlo_runs, "
-            "duration_s, corner, scenarios, estimators, identification {pop_size, n_gen, ...}, seed, ...",
+            help="Campaign settings file (.yaml/.toml/.json, ≤ 8 MB, no YAML aliases) overriding the "
+            "preset: monte_carlo_runs, duration_s, corner, scenarios, estimators, "
+            "identification {pop_size, n_gen, ...}, seed, ...",
         ),
     ] = None,
     progress: Annotated[bool, typer.Option(help="Show progress bars.")] = True,
