@@ -126,6 +126,7 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 import numpy.typing as npt
+from scipy import sparse
 from scipy.interpolate import CubicSpline
 from scipy.special import ndtr
 
@@ -1001,13 +1002,13 @@ class TyreMonitor:
         return math.exp(float(np.mean(values)))
 
     # ------------------------------------------------------------------ the filter
-    def _kernel(self, elapsed: float) -> tuple[np.ndarray, np.ndarray, float, float]:
+    def _kernel(self, elapsed: float) -> tuple[np.ndarray, list, float, float]:
         r"""The transition over `elapsed` seconds: the regimes' Markov matrix (2, 2) (row: from,
         column: to; steady 0, changing 1; exact for a two-state chain with rates
         1/``change_every_s`` and 1/``change_lasts_s``), the random walk of each regime as a
-        matrix on the 1 kPa grid (2, P, P) (Gaussian of σ = q √elapsed, each column normalized
-        within the range), the probability of a redraw from the prior and of a change of the
-        road's (damping, slope). Cached per elapsed time."""
+        matrix on the 1 kPa grid (P, P) each (Gaussian of σ = q √elapsed, each column normalized
+        within the range; a narrow one stored as a sparse band), the probability of a redraw from the
+        prior and of a change of the road's (damping, slope). Cached per elapsed time."""
         key = round(float(elapsed), 6)
         hit = self._kernels.get(key)
         if hit is not None:
@@ -1022,13 +1023,15 @@ class TyreMonitor:
         for q in (cfg.steady_drift_kpa, cfg.change_drift_kpa):
             sd = q * math.sqrt(max(elapsed, 0.0))
             if sd < 0.05:  # narrower than the grid can hold: no move
-                walks.append(np.eye(self._p_grid.size))
+                walks.append(sparse.identity(self._p_grid.size, format="csr"))
                 continue
-            k = np.exp(-0.5 * (step / sd) ** 2)
-            walks.append(k / k.sum(axis=0, keepdims=True))
+            # beyond 8.6 σ the Gaussian is below 1e-16 of its peak: dropped, so a narrow walk is a band
+            k = np.where(np.abs(step) <= 8.6 * sd, np.exp(-0.5 * (step / sd) ** 2), 0.0)
+            k /= k.sum(axis=0, keepdims=True)
+            walks.append(sparse.csr_matrix(k) if 8.6 * sd < 0.25 * self._p_grid.size else k)
         redraw = -math.expm1(-elapsed / cfg.redraw_every_s)
         road = -math.expm1(-elapsed / cfg.road_change_s)
-        out = (markov, np.stack(walks), redraw, road)
+        out = (markov, walks, redraw, road)
         if len(self._kernels) < 64:
             self._kernels[key] = out
         return out
@@ -1043,7 +1046,10 @@ class TyreMonitor:
         markov, walks, redraw, road = self._kernel(elapsed)
         post = self._state.post  # (C, R, D, B, P)
         mixed = np.einsum("rs,crdbp->csdbp", markov, post)
-        moved = np.einsum("sqp,csdbp->csdbq", walks, mixed)
+        moved = np.empty_like(mixed)
+        n_p = mixed.shape[-1]
+        for regime, walk in enumerate(walks):  # (to, from): a banded (sparse) or dense product per regime
+            moved[:, regime] = (walk @ mixed[:, regime].reshape(-1, n_p).T).T.reshape(mixed[:, regime].shape)
         total_p = moved.sum(axis=(2, 3), keepdims=True)  # (C, R, 1, 1, P)
         moved = (1.0 - road) * moved + road * self._prior_db[None, None, :, :, None] * total_p
         mass = moved.sum(axis=(2, 3, 4), keepdims=True)  # (C, R, 1, 1, 1)
