@@ -66,13 +66,14 @@ rear +0.7 ± 11.7 [0.96], front +2.5 ± 10.5 [0.94] (the monitor's own front +0.
 At 10 s: fused rear +4.2 ± 20.1 [0.95], the monitor's own +10.6 ± 25.4 [0.99]. So the preview
 improves the rear; it does not improve the front.
 
-Use in a monitor: one :class:`PreviewTrack` per track (fl→rl, fr→rr) with ``memories`` = the
-monitor's memories; before each update ``decay(exp(−Δt/τ_m))`` per memory, then ``add`` the
-update's samples (NaN where the monitor's checks rejected a sample); after it, per memory,
-``conditional(p̂_f, σ_f)`` with the monitor's front at that memory and ``fuse_track`` with its rear,
-keeping the front's own estimate. Cost (one core of a loaded 2-core machine, 3 memories): ``add``
-0.17–0.21 ms per second of data in 4 s chunks (0.3–0.4 ms in 1 s chunks), ``conditional``
-0.3–0.5 ms per call; state 13 kB per track and memory.
+Use in a monitor (:class:`suvtwin.estimators.monitor.TyreMonitor` with ``tracks``, off by
+default): one :class:`PreviewTrack` per track (fl→rl, fr→rr); before each update
+``decay(exp(−Δt/τ))`` (τ the monitor's ``preview_memory_s``), then ``add`` the update's samples
+(NaN where the monitor's checks rejected a sample); after it ``conditional(p̂_f, σ_f)`` with the
+monitor's front and ``fuse_track`` with its rear, keeping the front's own estimate. Several
+``memories`` (each forgotten at its own rate) are supported for other uses. Cost (one core of a
+loaded 2-core machine, 3 memories): ``add`` 0.17–0.21 ms per second of data in 4 s chunks
+(0.3–0.4 ms in 1 s chunks), ``conditional`` 0.3–0.5 ms per call; state 13 kB per track and memory.
 
 No MuJoCo here: the preview consumes arrays.
 
