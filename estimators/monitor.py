@@ -76,7 +76,7 @@ rectangular, linear detrend; above ``merge_above_hz`` the periodogram is average
    suspension law (``LinearQuarterCar.suspension``: a progressive spring with stops, a
    digressive damper) is analysed at its statistically linearized rate
    (:func:`suvtwin.suspension_law.equivalent_spring_rate`): the travel's and its velocity's
-   standard deviations come from each window's (and each memory's) spectrum of the relative
+   standard deviations come from each window's spectrum of the relative
    acceleration a_s − a_us above ``travel_min_hz``, the mean travel from the corner's static
    travel and the damper's jacking; and its tyre's stiffness and damping are scaled by the share
    of time it touches the road, Φ(W/σ_F), with the dynamic wheel load −(m_s a_s + m_us a_us)
@@ -96,8 +96,8 @@ rectangular, linear detrend; above ``merge_above_hz`` the periodogram is average
    preview sharpens the rears but, where the rear does not follow the front's track (weaves,
    curves), pulls them low: with it, 3 false warnings in 501 simulated minutes at nominal
    pressure, without it none (README).
-8. **Observability.** A corner whose σ exceeds ``observable_sigma_kpa`` (no usable data in
-   memory: low speed, flat road, faulty sensor) is flagged not observable; its estimate
+8. **Observability.** A corner whose σ exceeds ``observable_sigma_kpa`` (no usable data for a
+   while: low speed, flat road, faulty sensor) is flagged not observable; its estimate
    then relaxes toward the prior (``prior_pressure_kpa`` ± ``prior_sigma_kpa``) as the filter's
    random walk and redraws spread it, instead of holding an old value with a small σ.
 
