@@ -104,7 +104,7 @@ import numpy as np
 import numpy.typing as npt
 from scipy.signal import lfilter
 
-from suvtwin.errors import InputError
+from suvtwin.errors import InputError, positive
 
 __all__ = [
     "DEFLATED_TIRE",
@@ -164,10 +164,10 @@ class TwoTrackVehicle:
     track: float
 
     def __post_init__(self) -> None:
-        for name in ("mass", "yaw_inertia", "front_length", "rear_length", "cog_height", "track"):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value > 0):
-                raise InputError(f"vehicle {name} must be a finite number > 0, got {value!r}")
+        units = {"mass": "kg", "yaw_inertia": "kg m²", "front_length": "m", "rear_length": "m",
+                 "cog_height": "m", "track": "m"}
+        for name, unit in units.items():
+            positive(f"vehicle {name}", getattr(self, name), unit)
 
     @property
     def wheelbase(self) -> float:
@@ -195,10 +195,8 @@ class ArctanTire:
     k3: float
 
     def __post_init__(self) -> None:
-        for name in ("k1", "k2", "k3"):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value > 0):
-                raise InputError(f"tire {name} must be a finite number > 0, got {value!r}")
+        for name, unit in {"k1": "(dimensionless)", "k2": "N", "k3": "1/rad"}.items():
+            positive(f"tire {name}", getattr(self, name), unit)
 
     def as_array(self) -> np.ndarray:
         """``[k1, k2, k3]``, shape (3,)."""
