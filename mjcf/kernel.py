@@ -216,6 +216,9 @@ VEHICLE_BLOCKS = (
     ("track_f", 1),
     ("a2", 1),
     ("max_steer", 1),
+    ("compliance_steer_f", 1),  # front toe per N of the wheel's own side force, rad/N
+    ("bump_steer_f", 1),  # front toe-out per m of compression, rad/m
+    ("compliance_steer_r", 1),  # rear toe toward the side force per N, rad/N
     ("sigma_x", 1),
     ("sigma_y", 1),
     ("roll_res", 1),
@@ -243,6 +246,8 @@ V_V_KNEE = VEHICLE.v_knee
 V_ARB_F, V_ARB_R = VEHICLE.arb_f, VEHICLE.arb_r
 V_WHEELBASE, V_TRACK_F, V_A2 = VEHICLE.wheelbase, VEHICLE.track_f, VEHICLE.a2
 V_MAX_STEER = VEHICLE.max_steer
+V_COMPLIANCE_F, V_BUMP_STEER_F = VEHICLE.compliance_steer_f, VEHICLE.bump_steer_f
+V_COMPLIANCE_R = VEHICLE.compliance_steer_r
 V_SIGMA_X, V_SIGMA_Y = VEHICLE.sigma_x, VEHICLE.sigma_y
 V_ROLL_RES = VEHICLE.roll_res
 V_ENV_HALF, V_ENV_N = VEHICLE.env_half, VEHICLE.env_n
@@ -259,11 +264,13 @@ STATE_BLOCKS = (
     ("slip_v", 4),  # per corner: lateral tyre deflection (relaxation), m
     ("r_prev", 9),  # chassis rotation matrix of the previous step, row-major
     ("steer", 1),  # road-wheel angle of the bicycle model, rad
+    ("fy_prev", 4),  # per corner: tyre side force of the previous step (rear compliance steer), N
 )
 """Blocks of the kernel's scratch state, carried from step to step."""
 STATE, N_STATE = _layout("StateSlots", STATE_BLOCKS)
 S_INTEGRAL, S_SLIP_U, S_SLIP_V = STATE.integral, STATE.slip_u, STATE.slip_v
 S_R_PREV, S_STEER = STATE.r_prev, STATE.steer
+S_FY_PREV = STATE.fy_prev
 
 MODE_BLOCKS = (
     ("kind", 1),  # MODE_LANE, MODE_CIRCLE or MODE_OPEN_LOOP
@@ -341,6 +348,9 @@ def pack_vehicle(vm) -> np.ndarray:
     out[V_ARB_F], out[V_ARB_R] = s.anti_roll_front, s.anti_roll_rear
     out[V_WHEELBASE], out[V_TRACK_F], out[V_A2] = v.wheelbase, c.track_front, c.a2
     out[V_MAX_STEER] = v.steering.max_angle
+    out[V_COMPLIANCE_F] = v.steering.compliance_steer_front
+    out[V_BUMP_STEER_F] = v.steering.bump_steer_front
+    out[V_COMPLIANCE_R] = v.steering.compliance_steer_rear
     out[V_SIGMA_X], out[V_SIGMA_Y] = t.relaxation_length_longitudinal, t.relaxation_length_lateral
     out[V_ROLL_RES] = t.rolling_resistance
     out[V_ENV_HALF], out[V_ENV_N] = t.envelope_half_length, t.envelope_points
@@ -507,10 +517,6 @@ def step_kernel(
         delta = np.arctan(2.0 * wb * np.sin(eta) / dist)
     delta = min(max(delta, -vp[V_MAX_STEER]), vp[V_MAX_STEER])
     state[S_STEER] = delta
-    tan_d = np.tan(delta)
-    half_t = 0.5 * vp[V_TRACK_F]
-    ctrl[ids[I_STEER_ACT]] = np.arctan(wb * tan_d / (wb - half_t * tan_d))  # left (inner when delta > 0)
-    ctrl[ids[I_STEER_ACT + 1]] = np.arctan(wb * tan_d / (wb + half_t * tan_d))
 
     # ---- suspension ----
     travel = np.empty(4)
@@ -547,6 +553,10 @@ def step_kernel(
         sx, sy = kn[0, 1], kn[1, 1]
         norm = np.hypot(sx, sy)
         fx, fy = sy / norm, -sx / norm
+        if i >= 2:  # rear lateral-force compliance: toe toward the last step's side force
+            toe = vp[V_COMPLIANCE_R] * state[S_FY_PREV + i]
+            ct_, st_ = np.cos(toe), np.sin(toe)
+            fx, fy = ct_ * fx - st_ * fy, st_ * fx + ct_ * fy
         zr, slope = _envelope(cx, cy, fx, fy, vp[V_ENV_HALF], vp[V_ENV_N], hf, hdata)
         inv = 1.0 / np.sqrt(1.0 + slope * slope)
         nx, ny, nz = -slope * fx * inv, -slope * fy * inv, inv
@@ -606,6 +616,16 @@ def step_kernel(
         log[k, C_FY + i] = f_lat
         log[k, C_KAPPA + i] = kappa
         log[k, C_ALPHA + i] = alpha
+        state[S_FY_PREV + i] = f_lat
+
+    # ---- steering: Ackermann angles of the two knuckles, plus each front wheel's compliance steer
+    # (toe out of the turn per N of its side force, this step's) and bump steer (toe-out in bump) ----
+    tan_d = np.tan(delta)
+    half_t = 0.5 * vp[V_TRACK_F]
+    toe_l = vp[V_BUMP_STEER_F] * travel[0] - vp[V_COMPLIANCE_F] * log[k, C_FY]
+    toe_r = -vp[V_BUMP_STEER_F] * travel[1] - vp[V_COMPLIANCE_F] * log[k, C_FY + 1]
+    ctrl[ids[I_STEER_ACT]] = np.arctan(wb * tan_d / (wb - half_t * tan_d)) + toe_l  # left: inner if delta > 0
+    ctrl[ids[I_STEER_ACT + 1]] = np.arctan(wb * tan_d / (wb + half_t * tan_d)) + toe_r
 
     # ---- aerodynamic drag on the chassis (horizontal, opposite the velocity) ----
     vh = np.hypot(vx, vy)

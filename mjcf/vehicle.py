@@ -96,6 +96,9 @@ class Steering:
     max_angle: float
     servo_stiffness: float
     servo_damping: float
+    compliance_steer_front: float
+    bump_steer_front: float
+    compliance_steer_rear: float
 
 
 @dataclass(frozen=True)
