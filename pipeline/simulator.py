@@ -3,8 +3,9 @@
 Usual call: ``result = simulate(load_scenario("s.yaml")); write_run(result, "run.parquet")``.
 
 One run: build the road (seeded from the scenario), compile the SUV on it
-(:func:`suvtwin.mjcf.builder.build_model`), place the car at rest-deflection over the road
-at the set speed, then step MuJoCo with the compiled force kernel
+(:func:`suvtwin.mjcf.builder.build_model`), settle the car into static equilibrium on the
+road under its wheels for its loads and pressures and set it rolling steadily at the start
+speed (:mod:`suvtwin.mjcf.statics`), then step MuJoCo with the compiled force kernel
 (:func:`suvtwin.mjcf.kernel.step_kernel`) between ``mj_step1`` and ``mj_step2``. The
 step log is decimated to the output rate; the accelerometer signals get white
 noise from the scenario's noise stream. Output: one row per output sample, SI
@@ -46,14 +47,13 @@ from suvtwin.mjcf.kernel import (
     MODE_LANE,
     MODE_OPEN_LOOP,
     N_MODE,
-    N_STATE,
     finish_log,
     pack_ids,
     pack_vehicle,
-    road_height,
     step_kernel,
 )
-from suvtwin.mjcf.tire import effective_rolling_radius, load_tire, vertical_stiffness
+from suvtwin.mjcf.statics import settle, start_rolling
+from suvtwin.mjcf.tire import load_tire
 from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
 from suvtwin.pipeline.scenario import END_MARGIN_M, START_MARGIN_M, Scenario
 from suvtwin.roads.profile import Road, generate_road
@@ -183,33 +183,31 @@ def prepare(scenario: Scenario) -> _Prepared:
     else:
         mode[M_KIND] = MODE_OPEN_LOOP
     hdata = model.hfield_data.reshape(int(vm.hfield[H_NROW]), int(vm.hfield[H_NCOL]))
-    # initial pose: level, at the static height over the mean road under the wheels
-    corner = vehicle.corner_xy
-    road_under = np.mean([road_height(x0 + cx, y0 + cy, vm.hfield, hdata) for cx, cy in corner])
+    # start: static equilibrium for the run's loads, pressures and the road under the wheels,
+    # rolling steadily at the start speed (suvtwin.mjcf.statics: Newton on the model's own forces)
     cq = vm.ids["chassis_qpos"][0]
-    cd = vm.ids["chassis_dof"][0]
-    data.qpos[cq : cq + 3] = x0, y0, vehicle.chassis.cog_height + road_under
+    data.qpos[cq : cq + 2] = x0, y0
     data.qpos[cq + 3 : cq + 7] = 1.0, 0.0, 0.0, 0.0
-    v0 = speed_ref[0]
-    data.qvel[cd] = v0
-    tp = vm.tire.to_array()
-    for i in range(4):
-        fz = vehicle.static_tire_load[i]
-        data.qvel[vm.ids["spin_dof"][i]] = v0 / effective_rolling_radius(fz, pressure[0, i], tp)
-    if scenario.contact == "native":  # the ring starts at its static deflection, touching the road
-        for i in range(4):
-            kt = vertical_stiffness(pressure[0, i], tp)
-            data.qpos[vm.ids["ring_qpos"][i]] = vehicle.static_tire_load[i] / kt
-    mujoco.mj_forward(model, data)
+    settled = settle(vm, data, pressure[0], hdata)
+    if not settled.converged:
+        import warnings
+
+        warnings.warn(
+            f"the start is not fully settled: {settled.residual_n:.3g} N of force left unbalanced",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+    state0 = start_rolling(vm, data, pressure[0], float(speed_ref[0]), settled)
     inputs = {
         "pressure": pressure,
         "speed_ref": speed_ref,
         "steer_cmd": steer_cmd,
         "mode": mode,
-        "tp": tp,
+        "tp": vm.tire.to_array(),
         "vp": pack_vehicle(vm),
         "ids": pack_ids(vm.ids),
         "hdata": hdata,
+        "state": state0,
     }
     return _Prepared(vm=vm, data=data, road=road, inputs=inputs)
 
@@ -236,7 +234,7 @@ def simulate(scenario: Scenario, *, progress: bool = False) -> SimResult:
     n = scenario.n_steps
     dt = scenario.timestep_s
     log = np.zeros((n, len(LOG_COLUMNS)))
-    state = np.zeros(N_STATE)
+    state = inp["state"].copy()
     qpos, qvel, xpos, xmat = data.qpos, data.qvel, data.xpos, data.xmat
     sensordata, qfrc, xfrc, ctrl = data.sensordata, data.qfrc_applied, data.xfrc_applied, data.ctrl
     ids, hf, hdata, vp, tp = inp["ids"], vm.hfield, inp["hdata"], inp["vp"], inp["tp"]
