@@ -17,8 +17,10 @@ cached MjData views: per-step numpy calls would cost far more than the physics
   contact patch; longitudinal/lateral from MF-Tyre 6.1 with pressure effects and
   first-order relaxation), rolling resistance; on the chassis: aerodynamic drag;
 - ``ctrl``: Ackermann steering angles from one road-wheel angle (lane keeping by
-  pure pursuit, a circle, or an open-loop series) and drive/brake torque from a PI
-  speed controller;
+  pure pursuit, a circle, or an open-loop series), each front knuckle's plus its
+  lateral-force compliance steer (this step's side force) and bump steer (toe-out in
+  bump), and drive/brake torque from a PI speed controller; the rear tyres' compliance
+  toe (the previous step's side force, kept in the state) turns their force frame;
 - one row of the log per step (:data:`LOG_COLUMNS`).
 
 Road height under a tire (``envelope`` contact): the heightfield data are read at
