@@ -1,9 +1,9 @@
 """The settled start: the SUV in static equilibrium on its road at t = 0, rolling at the start speed.
 
-Usual call (the simulator's ``prepare``, after placing the car level over the road)::
+Usual call (the simulator's ``prepare``, with the car's x, y and yaw set)::
 
-    settle(vm, data, pressure0, hdata)                  # heave, roll, pitch, travels, tyre rings
-    state = start_rolling(vm, data, pressure0, speed0, hdata)  # speed, wheel spin, kernel state
+    settled = settle(vm, data, pressure0, hdata)       # heave, roll, pitch, travels, tyre rings
+    state = start_rolling(vm, data, pressure0, speed0, settled)  # speed, wheel spin, kernel state
 
 Method: Newton's method on the model itself. The unknowns are the chassis height, roll and
 pitch, the four suspension travels and, with ``native`` contact, the four tyre-ring slides (x,
@@ -12,12 +12,16 @@ the generalized force M·q̈ on those degrees of freedom at zero velocity, with 
 run will see: the step kernel's (:func:`suvtwin.mjcf.kernel.step_kernel`: spring with preload,
 stops, anti-roll bars, the tyre's radial force over the enveloped heightfield at each corner's
 own pressure) and MuJoCo's (gravity on the chassis, the corners and any load bodies wherever
-they sit; the native sphere–heightfield contact). Its Jacobian is taken by forward differences
-(7 or 11 evaluations, each one ``mj_kinematics`` + kernel + ``mj_forward``, ~30 µs) and
-reused while the residual falls tenfold per step; 1–6 iterations leave < 1e-3 N (N m) from
-the level design pose. Cost: about 1–5 ms per run, against ~0.1–0.2 s for the 10 s it
-starts. An asymmetric load, per-corner pressures or a rough road under the wheels simply move
-the solution (roll, pitch, unequal travels); a wheel over a dip may hang (zero tyre force).
+they sit; the native sphere–heightfield contact). The first guess lays the chassis parallel
+to the plane through the road under the four wheels, each wheel at its design deflection over
+its own road height (native: each ring just into the road, found by collision detection). The
+Jacobian is taken by forward differences (7 or 11 evaluations, each one ``mj_kinematics`` +
+kernel + ``mj_forward``, tens of µs) and kept while full steps cut the residual tenfold; steps
+are limited to 20 mm / 0.02 rad and backtracked until the residual falls. On a flat road 2
+iterations (native 5), on rough roads with offset loads and unequal pressures 3–6, leave
+< 1e-3 N (N m). Cost, measured on the 2-core machine: 0.5–1 ms per run with ``envelope``
+contact, 1–8 ms with ``native`` (its collisions with a rough heightfield), against ~0.09 s for
+the 10 s of a class C run it starts. A wheel over a dip may hang (zero tyre force).
 
 Why not a short pre-settling simulation with x, y and yaw held: the body's own damping ratio
 is ~0.3 at 1.2–1.5 Hz, so reaching hub accelerations below 1 m/s² takes seconds of simulated
