@@ -49,11 +49,18 @@ def _start_transients(cols, window=0.1):
 def test_start_is_settled_on_a_flat_road(contact, case):
     # issue 15: at constant speed on a flat road nothing moves vertically at t = 0 (before the
     # settled start: up to 21 m/s² of hub acceleration with native contact, 31 with one soft tyre)
-    hub, fz_min, heave, rates = _start_transients(_run(contact, 60.0, 0.15, **START_CASES[case]))
+    cols = _run(contact, 60.0, 0.15, **START_CASES[case])
+    hub, fz_min, heave, rates = _start_transients(cols)
     assert hub < 1.0
     assert fz_min > 1000.0  # every wheel on the ground
     assert heave < 0.01  # m/s at the four corners of the body
     assert rates < 0.01  # rad/s of roll and pitch
+    # and it rolls steadily: wheels spinning with the car (no lock-up or spin-up at t = 0), the
+    # drive already balancing drag and rolling resistance (no surge or braking)
+    first = cols["t_s"] < 0.1
+    assert max(np.abs(cols[f"{c}_tire_slip_ratio"][first]).max() for c in CORNERS) < 2e-3
+    assert np.abs(cols["speed_mps"][first] - 60.0 / 3.6).max() < 1e-3
+    assert np.abs(cols["long_accel_mps2"][first]).max() < 0.01
 
 
 @pytest.mark.parametrize("contact", ["envelope", "native"])
