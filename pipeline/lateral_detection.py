@@ -70,6 +70,8 @@ __all__ = [
     "RunDetection",
     "TireBank",
     "detect_run",
+    "detect_run_file",
+    "detection_columns",
     "detection_delay",
     "detector_signals",
     "fit_arctan_tire",
@@ -78,6 +80,7 @@ __all__ = [
     "steering_onset",
     "truth_model",
     "two_track_vehicle",
+    "write_detection",
 ]
 
 CORNERS = ("fl", "fr", "rl", "rr")  # the estimator's WHEELS order
@@ -405,3 +408,74 @@ def detect_run(
     return RunDetection(result=result, truth=truth, onset_s=onset, delay_s=delay, final=int(selected[-1]))
 
 
+
+
+# ------------------------------------------------------------------------ a run file in, a file out
+def detect_run_file(
+    run: str | Path,
+    *,
+    tire_file: str | Path | None = None,
+    nominal_kpa: float = NOMINAL_KPA,
+    deflated_kpa: float = DEFLATED_KPA,
+    accel: Literal["body", "horizontal"] = "body",
+    noise: tuple[float, float] | None = ESC_NOISE,
+    seed: int = 0,
+    true_sideslip: bool = False,
+) -> tuple[RunDetection, TireBank, dict, dict]:
+    """:func:`detect_run` on a run file (``suvtwin simulate``): the vehicle from the run's scenario
+    (its loads, overrides and tyre), the bank fitted to `tire_file` (default the run's tyre).
+
+    Returns the detection, the bank, the output columns (:func:`detection_columns`) and metadata.
+    """
+    from suvtwin.pipeline.simulator import read_run
+
+    table, meta = read_run(run)
+    scenario = None
+    if isinstance(meta.get("scenario"), dict):
+        scenario = parse_scenario(meta["scenario"], source=f"scenario of {Path(run).name}")
+    run_tire = scenario.tire_file if scenario is not None else None
+    bank = fit_bank(tire_file if tire_file is not None else run_tire,
+                    nominal_kpa=nominal_kpa, deflated_kpa=deflated_kpa)  # fmt: skip
+    vehicle = two_track_vehicle(scenario)
+    det = detect_run(table, vehicle, bank, accel=accel, noise=noise, seed=seed, true_sideslip=true_sideslip)
+    metadata = {
+        "run": str(run), "accel": accel, "noise": None if noise is None else list(noise), "seed": seed,
+        "true_sideslip": true_sideslip, "bank": bank.as_dict(), "vehicle": vehicle.__dict__,
+        "vehicle_from_scenario": scenario is not None, "truth": det.truth, "final": det.final,
+        "onset_s": det.onset_s, "delay_s": None if not np.isfinite(det.delay_s) else det.delay_s,
+    }  # fmt: skip
+    return det, bank, detection_columns(det), metadata
+
+
+def detection_columns(det: RunDetection) -> dict[str, np.ndarray]:
+    """Output columns: ``t_s``, ``selected`` (model 1..16), ``deflated_{c}`` (0/1 of the selected
+    model), ``cost_model_{i}`` (eq. 13, i = 1..16), ``stiffness_{c}_npr`` (eq. 15, N/rad)."""
+    from suvtwin.estimators.lateral_detection import N_MODELS, deflated_wheels
+
+    r = det.result
+    sel = r.selected[0]
+    flags = np.array([deflated_wheels(int(n)) for n in range(1, N_MODELS + 1)], dtype=float)[sel - 1]
+    out = {"t_s": r.time, "selected": sel.astype(float)}
+    for j, c in enumerate(CORNERS):
+        out[f"deflated_{c}"] = flags[:, j]
+    for i in range(N_MODELS):
+        out[f"cost_model_{i + 1}"] = r.cost[0, :, i]
+    for j, c in enumerate(CORNERS):
+        out[f"stiffness_{c}_npr"] = r.cornering_stiffness[0, :, j]
+    return out
+
+
+def write_detection(columns: dict[str, np.ndarray], path: str | Path, metadata: dict) -> None:
+    """Write :func:`detection_columns` to Parquet (atomically), `metadata` as JSON in the schema."""
+    import json
+
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from suvtwin.files import atomic_write
+
+    table = pa.Table.from_pydict({k: np.asarray(v, dtype=float) for k, v in columns.items()})
+    table = table.replace_schema_metadata(
+        {b"suvtwin.lateral_detection": json.dumps(metadata, sort_keys=True, default=float).encode()}
+    )
+    atomic_write(path, lambda tmp: pq.write_table(table, tmp, compression="zstd"))
