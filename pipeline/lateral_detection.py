@@ -69,6 +69,15 @@ __all__ = [
     "PAPER_COST",
     "RunDetection",
     "TireBank",
+    "CASES",
+    "SENSITIVITY_TIRE",
+    "VARIANTS",
+    "case_tire_file",
+    "cornering_stiffness_table",
+    "monte_carlo_study",
+    "score_rows",
+    "study_draw",
+    "study_scenario",
     "detect_run",
     "detect_run_file",
     "detection_columns",
@@ -408,8 +417,6 @@ def detect_run(
     return RunDetection(result=result, truth=truth, onset_s=onset, delay_s=delay, final=int(selected[-1]))
 
 
-
-
 # ------------------------------------------------------------------------ a run file in, a file out
 def detect_run_file(
     run: str | Path,
@@ -479,3 +486,172 @@ def write_detection(columns: dict[str, np.ndarray], path: str | Path, metadata: 
         {b"suvtwin.lateral_detection": json.dumps(metadata, sort_keys=True, default=float).encode()}
     )
     atomic_write(path, lambda tmp: pq.write_table(table, tmp, compression="zstd"))
+
+
+# ------------------------------------------------------------------------ the Monte Carlo study
+SENSITIVITY_TIRE = "suv_235_60R18_softer_deflated.tir"
+"""The labelled sensitivity-case tyre beside the SUV's .tir: cornering stiffness 20 % lower at 150 kPa."""
+CASES = ("shipped", "softer_deflated")
+"""Tyre cases of the study: the SUV's .tir (PPY1 < 0) and :data:`SENSITIVITY_TIRE`."""
+VARIANTS = {"esc_body": ("body", False), "roll_compensated": ("horizontal", False),
+            "ideal_sideslip": ("horizontal", True)}  # fmt: skip
+"""Detector variants: (a_y frame, true sideslip instead of eq. 10)."""
+STUDY_SEED0 = 900000
+_CHOICES = ("fl", "fr", "rl", "rr", None)
+
+
+def case_tire_file(case: str) -> str | None:
+    """The .tir of a tyre case (None: the SUV's own)."""
+    from suvtwin.mjcf.vehicle import load_vehicle
+
+    if case not in CASES:
+        raise InputError(f"tyre case must be one of {', '.join(CASES)}, got {case!r}")
+    return None if case == "shipped" else str(load_vehicle().tire_file.with_name(SENSITIVITY_TIRE))
+
+
+def study_draw(i: int) -> dict:
+    """Run i's random conditions (the same in every tyre case), from ``default_rng(STUDY_SEED0 + i)``:
+    speed 80–120 km/h, direction, the deflated tyre FL, FR, RL, RR or none in turn (``i % 5``: 20 %
+    none), its pressure 130–180 kPa, an extra load 0–300 kg at x ∈ [−1.8, 0.5] m, y ∈ [−0.5, 0.5] m,
+    z ∈ [−0.2, 0.2] m from the chassis CoG (boot to front seats)."""
+    rng = np.random.default_rng(STUDY_SEED0 + i)
+    speed = float(rng.uniform(80.0, 120.0))
+    direction = "left" if rng.random() < 0.5 else "right"
+    pressure = float(rng.uniform(130.0, 180.0))
+    load = float(rng.uniform(0.0, 300.0))
+    position = [float(rng.uniform(-1.8, 0.5)), float(rng.uniform(-0.5, 0.5)), float(rng.uniform(-0.2, 0.2))]
+    return {"i": i, "speed_kmh": round(speed, 2), "direction": direction, "tyre": _CHOICES[i % 5],
+            "pressure_kpa": round(pressure, 1), "load_kg": round(load, 1),
+            "load_position_m": [round(p, 3) for p in position]}  # fmt: skip
+
+
+def study_scenario(draw: dict, case: str) -> Scenario:
+    """The lane change of a :func:`study_draw` with the tyre of `case`."""
+    p = {c: (draw["pressure_kpa"] if c == draw["tyre"] else NOMINAL_KPA) for c in CORNERS}
+    return lane_change_scenario(speed_kmh=draw["speed_kmh"], pressure_kpa=p, direction=draw["direction"],
+                                load_kg=draw["load_kg"], load_position_m=tuple(draw["load_position_m"]),
+                                tire_file=case_tire_file(case), seed=draw["i"])  # fmt: skip
+
+
+def _detect_study_run(item: tuple) -> dict:
+    path, draw, case, bank, keep_series = item
+    from suvtwin.pipeline.simulator import read_run
+
+    table, _ = read_run(path)
+    vehicle = two_track_vehicle(study_scenario(draw, case))
+    row = {"draw": draw, "peak_ay_mps2": float(np.abs(table["lat_accel_mps2"]).max()),
+           "peak_roll_deg": float(np.degrees(np.abs(table["roll_rad"]).max()))}  # fmt: skip
+    for name, (accel, beta) in VARIANTS.items():
+        det = detect_run(
+            table, vehicle, bank, accel=accel, noise=ESC_NOISE, seed=draw["i"], true_sideslip=beta
+        )
+        row[name] = {"truth": det.truth, "final": det.final, "delay_s": det.delay_s, "onset_s": det.onset_s}
+        if keep_series:
+            row[name]["selected"] = det.result.selected[0].tolist()
+            row[name]["t_s"] = det.result.time.tolist()
+    return row
+
+
+def score_rows(rows: list[dict], variant: str) -> dict:
+    """Confusion matrix (true model → final pick → runs), correct rates, delay distribution (runs
+    with a deflated tyre whose final pick is right) and false-alarm rate of one variant."""
+    truths = sorted({r[variant]["truth"] for r in rows})
+    picks = sorted({r[variant]["final"] for r in rows} | set(truths))
+    matrix = {str(t): {str(p): sum(1 for r in rows if r[variant]["truth"] == t and r[variant]["final"] == p)
+                       for p in picks} for t in truths}  # fmt: skip
+    delays = np.array([r[variant]["delay_s"] for r in rows if r[variant]["truth"] != 16], dtype=float)
+    delays = delays[np.isfinite(delays)]
+    nominal = [r for r in rows if r[variant]["truth"] == 16]
+    edges = [0.0, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 10.0, 30.0]
+    return {
+        "runs": len(rows),
+        "correct_rate": float(np.mean([r[variant]["final"] == r[variant]["truth"] for r in rows])),
+        "correct_rate_per_truth": {str(t): float(np.mean([r[variant]["final"] == t for r in rows
+                                                           if r[variant]["truth"] == t])) for t in truths},
+        "confusion_truth_vs_final": matrix,
+        "delay_s": {
+            "n": int(delays.size),
+            "quantiles_0_25_50_75_90_100": (np.quantile(delays, [0, .25, .5, .75, .9, 1]).tolist()
+                                            if delays.size else None),
+            "histogram_edges_s": edges,
+            "histogram_counts": np.histogram(delays, bins=edges)[0].tolist(),
+        },
+        "false_alarm_rate_no_deflation": (float(np.mean([r[variant]["final"] != 16 for r in nominal]))
+                                          if nominal else None),
+    }  # fmt: skip
+
+
+def monte_carlo_study(
+    n_runs: int, runs_dir: str | Path, *, jobs: int = 1, cases: tuple[str, ...] = CASES
+) -> dict:
+    """The detector over `n_runs` ISO 3888-1 lane changes per tyre case (:func:`study_draw`).
+
+    Runs are simulated (and reused) in ``runs_dir/<case>/`` by
+    :func:`suvtwin.pipeline.monitor_scenarios.simulate_cached`. Returns per case the fitted bank,
+    the simulation cost, peak a_y and roll, per variant :func:`score_rows`, and an example run
+    (the first with the front-left tyre deflated: its selected model over time per variant).
+    """
+    import multiprocessing
+    import os
+    import time
+
+    from suvtwin.pipeline.monitor_scenarios import BenchRun, simulate_cached
+
+    if not (isinstance(n_runs, int) and n_runs >= 1):
+        raise InputError(f"n_runs must be a positive whole number, got {n_runs!r}")
+    out = {"runs_per_case": n_runs, "cases": {}}
+    for case in cases:
+        started = time.perf_counter()
+        bank = fit_bank(case_tire_file(case))
+        fit_s = time.perf_counter() - started
+        draws = [study_draw(i) for i in range(n_runs)]
+        runs = [BenchRun(name=f"{case}-{d['i']}", set="lateral_detection", scenario=study_scenario(d, case))
+                for d in draws]  # fmt: skip
+        paths, cost = simulate_cached(runs, Path(runs_dir) / case, jobs=jobs)
+        items = [
+            (str(p), d, case, bank, d["i"] == 0) for p, d in zip(paths, draws, strict=True) if p is not None
+        ]
+        started = time.perf_counter()
+        if jobs > 1 and len(items) > 1:
+            ctx = multiprocessing.get_context("spawn" if os.name == "nt" else "forkserver")
+            with ctx.Pool(min(jobs, len(items))) as pool:
+                rows = pool.map(_detect_study_run, items)
+        else:
+            rows = [_detect_study_run(it) for it in items]
+        example = next((r for r in rows if r["draw"]["i"] == 0), None)
+        out["cases"][case] = {
+            "tire_file": case_tire_file(case) or "(the SUV's)",
+            "bank": bank.as_dict(),
+            "bank_fit_s": round(fit_s, 2),
+            "simulation": cost,
+            "detection_wall_s": round(time.perf_counter() - started, 2),
+            "peak_ay_mps2_quantiles_0_50_100": _quantiles([r["peak_ay_mps2"] for r in rows]),
+            "peak_roll_deg_quantiles_0_50_100": _quantiles([r["peak_roll_deg"] for r in rows]),
+            "variants": {v: score_rows(rows, v) for v in VARIANTS},
+            "example": None if example is None else {"draw": example["draw"], **{
+                v: {k: example[v][k] for k in ("t_s", "selected", "truth", "onset_s")} for v in VARIANTS}},
+        }  # fmt: skip
+    out["cornering_stiffness_vs_pressure"] = cornering_stiffness_table()
+    return out
+
+
+def _quantiles(values: list[float]) -> list[float]:
+    return np.quantile(values, [0.0, 0.5, 1.0]).tolist()
+
+
+def cornering_stiffness_table(loads_n=(3000.0, 4500.0, 6000.0), pressures_kpa=(250.0, 150.0)) -> dict:
+    """Zero-slip cornering stiffness of each case's MF tyre, N/rad, at `loads_n` and `pressures_kpa`
+    (the simulator's tyre force function, finite difference at α = 1e-4 rad), and the change from
+    the first pressure to the last, %."""
+    from suvtwin.mjcf.tire import load_tire, tire_forces_array
+    from suvtwin.mjcf.vehicle import load_vehicle
+
+    table = {}
+    for case in CASES:
+        tire = load_tire(case_tire_file(case) or load_vehicle().tire_file)
+        k = np.array([[-tire_forces_array(fz, 0.0, 1e-4, p * 1e3, tire)[1] / 1e-4 for p in pressures_kpa]
+                      for fz in loads_n])  # fmt: skip
+        table[case] = {"loads_n": list(loads_n), "pressures_kpa": list(pressures_kpa),
+                       "stiffness_n_per_rad": k.tolist(),
+                       "change_percent": (100.0 * (k[:, -1] / k[:, 0] - 1.0)).tolist()}  # fmt: skip
+    return table
