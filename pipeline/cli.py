@@ -818,6 +818,9 @@ def run_command(
     if (out / "road_estimation.json").is_file():
         typer.echo(f"paper 002's road-profile estimation on the SUV ({t['road_estimation_s']:.0f} s): "
                    f"{out / 'road_estimation.json'}")  # fmt: skip
+    if (out / "lateral_detection.json").is_file():
+        typer.echo(f"paper 004's deflated-tyre detection on the SUV ({t['lateral_detection_s']:.0f} s): "
+                   f"{out / 'lateral_detection.json'}")  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:
