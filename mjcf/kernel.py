@@ -17,8 +17,8 @@ cached MjData views: per-step numpy calls would cost far more than the physics
   contact patch; longitudinal/lateral from MF-Tyre 6.1 with pressure effects and
   first-order relaxation), rolling resistance; on the chassis: aerodynamic drag;
 - ``ctrl``: Ackermann steering angles from one road-wheel angle (lane keeping by
-  pure pursuit, a circle, or an open-loop series), each front knuckle's plus its
-  lateral-force compliance steer (this step's side force) and bump steer (toe-out in
+  pure pursuit, a circle, a tabulated path y(x), or an open-loop series), each front knuckle's
+  plus its lateral-force compliance steer (this step's side force) and bump steer (toe-out in
   bump), and drive/brake torque from a PI speed controller; the rear tyres' compliance
   toe (the previous step's side force, kept in the state) turns their force frame;
 - one row of the log per step (:data:`LOG_COLUMNS`).
@@ -68,6 +68,7 @@ __all__ = [
     "MODE_CIRCLE",
     "MODE_LANE",
     "MODE_OPEN_LOOP",
+    "MODE_PATH",
     "N_MODE",
     "N_STATE",
     "STATE_BLOCKS",
@@ -80,8 +81,9 @@ __all__ = [
     "step_kernel",
 ]
 
-MODE_LANE, MODE_CIRCLE, MODE_OPEN_LOOP = 0, 1, 2
-"""Steering modes (``mode[M_KIND]``): lane keeping, a circle, an open-loop angle series."""
+MODE_LANE, MODE_CIRCLE, MODE_OPEN_LOOP, MODE_PATH = 0, 1, 2, 3
+"""Steering modes (``mode[M_KIND]``): lane keeping, a circle, an open-loop angle series, a
+tabulated reference path y(x) (pure pursuit; the table follows the fixed blocks of ``mode``)."""
 
 
 def _layout(typename: str, blocks: tuple[tuple[str, int], ...]) -> tuple[tuple, int]:
@@ -280,11 +282,17 @@ MODE_BLOCKS = (
     ("centre_y", 1),  # circle: y of its centre, m
     ("radius", 1),  # circle: radius, m
     ("direction", 1),  # circle: +1 left (counter-clockwise), -1 right
+    ("path_x0", 1),  # path: world x of the table's first point, m
+    ("path_dx", 1),  # path: spacing of the table's points in x, m (> 0)
+    ("path_n", 1),  # path: number of points of the table (>= 2)
 )
-"""Blocks of the steering-mode array (``mode``) the simulator packs."""
+"""Blocks of the steering-mode array (``mode``) the simulator packs. In :data:`MODE_PATH` the
+array continues after these blocks with the path's ``path_n`` lateral positions y, m, at
+x = path_x0 + j·path_dx (linear in between, held beyond the ends)."""
 MODE, N_MODE = _layout("ModeSlots", MODE_BLOCKS)
 M_KIND, M_LANE_Y, M_CENTRE_X = MODE.kind, MODE.lane_y_or_centre_x, MODE.lane_y_or_centre_x
 M_CENTRE_Y, M_RADIUS, M_DIRECTION = MODE.centre_y, MODE.radius, MODE.direction
+M_PATH_X0, M_PATH_DX, M_PATH_N = MODE.path_x0, MODE.path_dx, MODE.path_n
 
 
 HEIGHTFIELD_BLOCKS = (
@@ -409,6 +417,20 @@ def _envelope(cx, cy, fx, fy, half, npts, hf, hdata):
 
 
 @cached_njit
+def _path_y(x, mode):
+    """Lateral position of the tabulated path (:data:`MODE_PATH`) at world x, m: linear, held at the ends."""
+    n = int(mode[M_PATH_N])
+    f = (x - mode[M_PATH_X0]) / mode[M_PATH_DX]
+    if f <= 0.0:
+        return mode[N_MODE]
+    if f >= n - 1:
+        return mode[N_MODE + n - 1]
+    j = int(f)
+    w = f - j
+    return (1.0 - w) * mode[N_MODE + j] + w * mode[N_MODE + j + 1]
+
+
+@cached_njit
 def _damper(v, vp):
     """Damper force for compression velocity v (m/s, > 0 in bump), N; digressive, asymmetric."""
     knee = vp[V_V_KNEE]
@@ -509,6 +531,9 @@ def step_kernel(
         look = max(vp[V_PREVIEW_MIN], abs(speed) * vp[V_PREVIEW_T])
         if mode[M_KIND] == MODE_LANE:
             tx, ty = rx + look, mode[M_LANE_Y]
+        elif mode[M_KIND] == MODE_PATH:
+            tx = rx + look  # the path runs along +x with small slopes: target one look-ahead ahead in x
+            ty = _path_y(tx, mode)
         else:
             ocx, ocy, radius = mode[M_CENTRE_X], mode[M_CENTRE_Y], mode[M_RADIUS]
             theta = np.arctan2(ry - ocy, rx - ocx) + mode[M_DIRECTION] * look / radius

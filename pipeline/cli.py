@@ -615,6 +615,66 @@ def input_estimate_command(
                    f"vertical force {err[0]:.1f} %, pitch torque {err[1]:.1f} %")  # fmt: skip
 
 
+@app.command("lateral-detect")
+def lateral_detect_command(
+    run: Annotated[Path, typer.Argument(help="Run file (suvtwin simulate), e.g. an iso3888 lane change.")],
+    out: Annotated[
+        Path,
+        typer.Option("--out", help="Output Parquet: t_s, selected model (1-16), its deflated tyres, "
+                     "the 16 costs and the selected tyres' cornering stiffness."),
+    ],
+    tire: Annotated[
+        Path | None,
+        typer.Option(help="MF-Tyre .tir the bank's arctan tyres are fitted to (default: the run's)."),
+    ] = None,
+    deflated_kpa: Annotated[
+        float, typer.Option(help="Pressure of the bank's deflated tyre, kPa (80-350, below --nominal-kpa).")
+    ] = 155.0,
+    nominal_kpa: Annotated[float, typer.Option(help="Nominal pressure of the bank, kPa (80-350).")] = 250.0,
+    accel: Annotated[
+        str, typer.Option(help="a_y as a body-fixed ESC sensor reads it (body) or roll-free (horizontal).")
+    ] = "body",
+    noise: Annotated[
+        bool, typer.Option("--noise/--no-noise", help="Add ESC-grade noise (0.05 m/s^2, 0.2 deg/s).")
+    ] = True,
+    true_sideslip: Annotated[
+        bool,
+        typer.Option(help="Use the run's true sideslip instead of eq. 10's integral (an ideal observer)."),
+    ] = False,
+    seed: Annotated[int, typer.Option(help="Seed of the noise (>= 0).")] = 0,
+) -> None:
+    """Which tyre is deflated: Solmaz's 16 two-track models on a run's ESC signals."""
+    _check_out(out, "--out", (".parquet",))
+    if seed < 0:
+        raise InputError(f"--seed must be ≥ 0, got {seed}")
+    if accel not in ("body", "horizontal"):
+        raise InputError(f"--accel must be body or horizontal, got {accel!r}")
+    for name, value in (("--deflated-kpa", deflated_kpa), ("--nominal-kpa", nominal_kpa)):
+        if not 80.0 <= value <= 350.0:
+            raise InputError(f"{name} must be in [80, 350] kPa, got {value:g}")
+    if not deflated_kpa < nominal_kpa:
+        raise InputError(f"--deflated-kpa ({deflated_kpa:g}) must be below --nominal-kpa ({nominal_kpa:g})")
+    if tire is not None and not tire.is_file():
+        raise InputError(f"--tire: file {str(tire)!r} does not exist")
+    _import_mujoco_without_gl()
+    from suvtwin.estimators.lateral_detection import deflated_wheels
+    from suvtwin.pipeline.lateral_detection import ESC_NOISE, detect_run_file, write_detection
+
+    det, bank, columns, metadata = detect_run_file(
+        run, tire_file=tire, nominal_kpa=nominal_kpa, deflated_kpa=deflated_kpa, accel=accel,
+        noise=ESC_NOISE if noise else None, seed=seed, true_sideslip=true_sideslip,
+    )  # fmt: skip
+    write_detection(columns, out, metadata)
+
+    def named(n: int) -> str:
+        flags = [c for c, f in zip(("FL", "FR", "RL", "RR"), deflated_wheels(n), strict=True) if f]
+        return f"model {n} ({' '.join(flags) or 'none deflated'})"
+
+    typer.echo(f"wrote {out} ({columns['t_s'].size} samples)")
+    found = f"; right from {det.delay_s:.2f} s after the steering onset" if det.correct else ""
+    typer.echo(f"  final pick: {named(det.final)}; truth: {named(det.truth)}{found}")
+
+
 @app.command("score")
 def score_command(
     estimate: Annotated[Path, typer.Argument(help="Estimate file (suvtwin estimate).")],
@@ -758,6 +818,9 @@ def run_command(
     if (out / "road_estimation.json").is_file():
         typer.echo(f"paper 002's road-profile estimation on the SUV ({t['road_estimation_s']:.0f} s): "
                    f"{out / 'road_estimation.json'}")  # fmt: skip
+    if (out / "lateral_detection.json").is_file():
+        typer.echo(f"paper 004's deflated-tyre detection on the SUV ({t['lateral_detection_s']:.0f} s): "
+                   f"{out / 'lateral_detection.json'}")  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:

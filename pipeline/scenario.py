@@ -26,11 +26,14 @@ from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
 from suvtwin.roads.spec import RoadSpec, format_validation_error
 
 __all__ = [
+    "ISO3888_OFFSET_M",
+    "ISO3888_SECTIONS_M",
     "LoadSpec",
     "NoiseSpec",
     "PressureEvent",
     "Scenario",
     "SteeringSpec",
+    "iso3888_centreline",
     "load_scenario",
     "parse_scenario",
     "quick_scenario",
@@ -73,20 +76,60 @@ class LoadSpec(BaseModel):
     position_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
 
+ISO3888_SECTIONS_M = (15.0, 30.0, 25.0, 25.0, 15.0, 15.0)
+"""Lengths of the six sections of the ISO 3888-1:2018 double lane change, m: entry lane,
+lane change, offset lane, change back, exit lane (two sections of 15 m)."""
+ISO3888_OFFSET_M = 3.5
+"""Lateral offset of the ISO 3888-1 offset lane (section 3), m."""
+
+
+def _smoothstep(s: np.ndarray) -> np.ndarray:
+    """Quintic 0 → 1 on [0, 1] with zero slope and curvature at both ends (C² transitions)."""
+    s = np.clip(s, 0.0, 1.0)
+    return s**3 * (10.0 - 15.0 * s + 6.0 * s * s)
+
+
+def iso3888_centreline(x: np.ndarray, *, start_m: float, offset_m: float, sign: float) -> np.ndarray:
+    """Centreline y(x) of the ISO 3888-1 double lane change, m, as a smooth curve.
+
+    ``x`` in m from the car's start (chassis centre of gravity at t = 0); section 1 (entry,
+    15 m) begins at `start_m`; sections 2 and 4 (30 m and 25 m) move the centreline by
+    ``sign·offset_m`` and back with a quintic smoothstep; section 3 (25 m) holds the offset;
+    sections 5–6 (exit, 30 m) and beyond are at y = 0. The standard fixes the sections'
+    lengths and lane widths (1.1, 1.2 and 1.3 × vehicle width + 0.25 m) and dimensions the
+    3.5 m offset between cone lines; here it is taken between lane centrelines (the two differ
+    by half the difference of the lane widths, 0.05 × vehicle width ≈ 0.1 m on the SUV).
+    """
+    l1, l2, l3, l4, _, _ = ISO3888_SECTIONS_M
+    a = start_m + l1
+    b = a + l2 + l3
+    up = _smoothstep((np.asarray(x, dtype=float) - a) / l2)
+    down = _smoothstep((np.asarray(x, dtype=float) - b) / l4)
+    return sign * offset_m * (up - down)
+
+
 class SteeringSpec(BaseModel):
     """How the driver steers.
 
     ``lane``: keep the straight line y = `lane_y_m` (pure pursuit); ``circle``: follow a
     circle of `radius_m` turning `direction` from the start; ``series``: road-wheel angle
-    (bicycle model, rad) from `series` = [[t_s, angle_rad], …], linear in between.
+    (bicycle model, rad) from `series` = [[t_s, angle_rad], …], linear in between;
+    ``path``: follow the reference path `path` = [[x_m, y_m], …] (pure pursuit; x from the
+    car's start, strictly increasing, linear in between, y held beyond the ends; lateral
+    positions relative to `lane_y_m`); ``iso3888``: the ISO 3888-1 double lane change
+    (:func:`iso3888_centreline`) towards `direction`, section 1 beginning `iso3888_start_m`
+    ahead of the car's start, offset `iso3888_offset_m`.
     """
 
     model_config = _MODEL
-    mode: Literal["lane", "circle", "series"] = "lane"
+    mode: Literal["lane", "circle", "series", "path", "iso3888"] = "lane"
     lane_y_m: float = 0.0
     radius_m: float = Field(default=50.0, ge=5.0, le=2000.0)
     direction: Literal["left", "right"] = "left"
     series: list[tuple[float, float]] = Field(default_factory=list)
+    path: list[tuple[float, float]] = Field(default_factory=list)
+    iso3888_start_m: float = Field(default=50.0, ge=0.0, le=10000.0)
+    iso3888_offset_m: float = Field(default=ISO3888_OFFSET_M, gt=0.0, le=10.0)
 
     @model_validator(mode="after")
     def _series_given(self) -> SteeringSpec:
@@ -98,7 +141,43 @@ class SteeringSpec(BaseModel):
                 raise ValueError("series times must be strictly increasing")
             if any(abs(a) > 0.6 for _, a in self.series):
                 raise ValueError("series angles must lie within ±0.6 rad (the steering lock)")
+        if self.mode == "path":
+            if len(self.path) < 2:
+                raise ValueError("mode 'path' needs path = [[x_m, y_m], ...] with at least 2 points")
+            xs = [x for x, _ in self.path]
+            if any(b <= a for a, b in zip(xs, xs[1:], strict=False)):
+                raise ValueError("path x values must be strictly increasing (the path is a function y(x))")
+            if xs[-1] - xs[0] > 20000.0:
+                raise ValueError(f"path must span at most 20000 m in x, got {xs[-1] - xs[0]:g} m")
+            if any(abs(y) > 50.0 for _, y in self.path):
+                raise ValueError("path y values must lie within ±50 m of lane_y_m")
+            slopes = [
+                abs((y1 - y0) / (x1 - x0))
+                for (x0, y0), (x1, y1) in zip(self.path, self.path[1:], strict=False)
+            ]
+            if max(slopes) > 0.5:
+                raise ValueError(
+                    f"path slope |dy/dx| must be at most 0.5 (the driver targets a point one look-ahead "
+                    f"ahead in x), got {max(slopes):.3g}"
+                )
         return self
+
+    def reference_path(self, *, spacing_m: float = 0.25) -> tuple[np.ndarray, np.ndarray] | None:
+        """The path the driver follows in ``path`` or ``iso3888`` mode, tabulated at `spacing_m`:
+        x from the car's start and y relative to `lane_y_m`, m; `None` in the other modes."""
+        if self.mode == "path":
+            px, py = np.array(self.path, dtype=float).T
+            n = max(2, int(np.ceil((px[-1] - px[0]) / spacing_m)) + 1)
+            x = np.linspace(px[0], px[-1], n)
+            return x, np.interp(x, px, py)
+        if self.mode == "iso3888":
+            length = self.iso3888_start_m + sum(ISO3888_SECTIONS_M)
+            x = np.arange(0.0, length + spacing_m, spacing_m)
+            sign = 1.0 if self.direction == "left" else -1.0
+            return x, iso3888_centreline(
+                x, start_m=self.iso3888_start_m, offset_m=self.iso3888_offset_m, sign=sign
+            )
+        return None
 
 
 class NoiseSpec(BaseModel):

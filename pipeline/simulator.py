@@ -42,10 +42,14 @@ from suvtwin.mjcf.kernel import (
     M_DIRECTION,
     M_KIND,
     M_LANE_Y,
+    M_PATH_DX,
+    M_PATH_N,
+    M_PATH_X0,
     M_RADIUS,
     MODE_CIRCLE,
     MODE_LANE,
     MODE_OPEN_LOOP,
+    MODE_PATH,
     N_MODE,
     finish_log,
     pack_ids,
@@ -137,6 +141,9 @@ def _road_for(scenario: Scenario) -> tuple[Road, float]:
         if scenario.steering.mode == "circle":
             radius = scenario.steering.radius_m
             x_min, x_max, half = -radius - 50.0, radius + 50.0, 2 * radius + 50.0
+        path = scenario.steering.reference_path()
+        if path is not None:  # the road must reach the path's widest point
+            half = max(half, abs(scenario.steering.lane_y_m) + float(np.max(np.abs(path[1]))) + 10.0)
         x = np.linspace(x_min, x_max, 3)
         return Road(x=x, z=np.zeros((2, 3))), half
     road = generate_road(scenario.road, seed=scenario.road_seed())
@@ -180,6 +187,12 @@ def prepare(scenario: Scenario) -> _Prepared:
         x0 = 0.0
         mode[M_KIND], mode[M_DIRECTION], mode[M_RADIUS] = MODE_CIRCLE, sign, scenario.steering.radius_m
         mode[M_CENTRE_X], mode[M_CENTRE_Y] = x0, y0 + sign * scenario.steering.radius_m
+    elif scenario.steering.mode in ("path", "iso3888"):
+        px, py = scenario.steering.reference_path()
+        mode = np.zeros(N_MODE + px.size)
+        mode[M_KIND], mode[M_PATH_X0], mode[M_PATH_N] = MODE_PATH, x0 + px[0], px.size
+        mode[M_PATH_DX] = px[1] - px[0]
+        mode[N_MODE:] = y0 + py
     else:
         mode[M_KIND] = MODE_OPEN_LOOP
     hdata = model.hfield_data.reshape(int(vm.hfield[H_NROW]), int(vm.hfield[H_NCOL]))

@@ -119,6 +119,7 @@ def remove_stale_temporaries(out: Path) -> None:
     with the folder locked (:func:`campaign_lock`): another campaign's temporaries are live files."""
     for pattern in ("runs/.*.tmp*", "estimates/*/.*.tmp*", "identification/*/.*.tmp*", "premise/.*.tmp*",
                     "identification/.*.tmp*", "monitor/*/.*.tmp*", "road_estimation/.*.tmp*",
+                    "lateral_detection/.*.tmp*", "lateral_detection/runs/*/.*.tmp*",
                     ".*.tmp*"):  # fmt: skip
         for path in out.glob(pattern):
             path.unlink(missing_ok=True)

@@ -73,6 +73,9 @@ class CampaignConfig(BaseModel):
     road_estimation_seeds: int = Field(default=0, ge=0, le=20)
     """Seeds of the road-profile study on the SUV (Wang et al. 2017's Table 2, 18 cells, 9 MuJoCo
     runs per seed: :func:`suvtwin.pipeline.road_estimation.mujoco_study`); 0: none."""
+    lateral_detection_runs: int = Field(default=0, ge=0, le=1000)
+    """ISO 3888-1 lane changes per tyre case of the deflated-tyre detection study (Solmaz's 16
+    two-track models: :func:`suvtwin.pipeline.lateral_detection.monte_carlo_study`); 0: none."""
 
     @model_validator(mode="after")
     def _known_names(self) -> CampaignConfig:
@@ -104,7 +107,8 @@ def preset(name: str, **overrides) -> CampaignConfig:
     """The ``quick`` (40 Monte Carlo runs, GA 100 × 100, premise check 6 runs per class, monitor study
     2 slow leaks and 4 warning runs) or ``full`` (paper scale: 100 runs, GA 100 × 1000, premise check
     25 runs per class, monitor study 20 slow leaks and 100 warning runs, paper 001's input-estimation
-    study with 10 noise draws, road-profile study 3 seeds) campaign, with optional field overrides
+    study with 10 noise draws, road-profile study 3 seeds, lateral detection study 100 lane changes
+    per tyre case) campaign, with optional field overrides
     (e.g. ``monte_carlo_runs=40``, ``road_estimation_seeds=3`` for the road-profile study in a quick
     campaign)."""
     presets = {
@@ -125,6 +129,7 @@ def preset(name: str, **overrides) -> CampaignConfig:
             "monitor_warning_runs": 100,
             "input_estimation_seeds": 10,
             "road_estimation_seeds": 3,
+            "lateral_detection_runs": 100,
         },
     }
     if name not in presets:

@@ -404,6 +404,33 @@ def _road_estimation_study(config: CampaignConfig, out: Path) -> tuple[dict | No
     return json.loads(path.read_text()), made
 
 
+LATERAL_DETECTION_SOURCES = (*SIMULATION_SOURCES, "suvtwin.estimators.lateral_detection",
+                             "suvtwin.pipeline.lateral_detection",
+                             "suvtwin.pipeline.monitor_scenarios")  # fmt: skip
+"""What the lateral detection study is made by (besides its number of runs)."""
+
+
+def _lateral_detection_study(config: CampaignConfig, out: Path, jobs: int) -> tuple[dict | None, bool]:
+    """Solmaz's detector on ``config.lateral_detection_runs`` ISO 3888-1 lane changes per tyre case
+    (:func:`suvtwin.pipeline.lateral_detection.monte_carlo_study`; runs in
+    ``lateral_detection/runs/``), None when 0, and whether it was made now. Cached in
+    ``lateral_detection/study-<key>.json`` (key: runs and code)."""
+    if config.lateral_detection_runs == 0:
+        return None, False
+    from suvtwin.pipeline.lateral_detection import monte_carlo_study
+
+    n = config.lateral_detection_runs
+    key = digest({"runs": n, "model": model_fingerprint(LATERAL_DETECTION_SOURCES)})
+    path = out / "lateral_detection" / f"study-{key}.json"
+    made = not verify_cached(path)
+    if made:
+        study = monte_carlo_study(n, out / "lateral_detection" / "runs", jobs=jobs)
+        text = json.dumps(_json_ready(study))
+        path.parent.mkdir(exist_ok=True)
+        write_cached(path, lambda tmp: Path(tmp).write_text(text))
+    return json.loads(path.read_text()), made
+
+
 def run_campaign(config: CampaignConfig, out: str | Path, *, jobs: int = 1, progress: bool = False) -> dict:
     """Run (or resume) the campaign in folder `out`; write metrics and the report there.
 
@@ -479,6 +506,14 @@ def _run_locked(config: CampaignConfig, out: Path, jobs: int, progress: bool,
     else:
         (out / "road_estimation.json").unlink(missing_ok=True)
     timings["road_estimation_s"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    lateral_detection, timings["lateral_detection_made"] = _lateral_detection_study(config, out, jobs)
+    if lateral_detection is not None:
+        text = json.dumps(lateral_detection, indent=1)
+        atomic_write(out / "lateral_detection.json", lambda tmp: Path(tmp).write_text(text))
+    else:
+        (out / "lateral_detection.json").unlink(missing_ok=True)
+    timings["lateral_detection_s"] = time.perf_counter() - t0
     summary = {
         "config": config.model_dump(mode="json"),
         "config_hash": digest(config.model_dump(mode="json")),
@@ -494,7 +529,7 @@ def _run_locked(config: CampaignConfig, out: Path, jobs: int, progress: bool,
     t0 = time.perf_counter()
     write_report(out / "report.html", config, specs, metrics, mc_table, series, params_path, summary,
                  premise=premise, monitor=monitor, input_estimation=input_estimation,
-                 road_estimation=road_estimation)  # fmt: skip
+                 road_estimation=road_estimation, lateral_detection=lateral_detection)  # fmt: skip
     timings["report_s"] = time.perf_counter() - t0
     timings["total_s"] = time.perf_counter() - started
     atomic_write(out / "campaign.json", lambda tmp: Path(tmp).write_text(json.dumps(summary, indent=2)))

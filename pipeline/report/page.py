@@ -287,13 +287,16 @@ def write_report(
     monitor: dict | None = None,
     input_estimation: dict | None = None,
     road_estimation: dict | None = None,
+    lateral_detection: dict | None = None,
 ) -> None:
     """Write the self-contained HTML report of a campaign (atomically); `premise`: the summary of
     paper 000's premise check (:func:`suvtwin.pipeline.premise.premise_summary`), or None;
     `monitor`: the online monitor's study (``monitor.json``), or None; `input_estimation`: paper
     001's input-estimation study on the SUV (``input_estimation.json``), or None; `road_estimation`:
     the road-profile study on the SUV (``road_estimation.json``,
-    :func:`suvtwin.pipeline.road_estimation.mujoco_study`), or None."""
+    :func:`suvtwin.pipeline.road_estimation.mujoco_study`), or None; `lateral_detection`: Solmaz's
+    deflated-tyre detection on the SUV (``lateral_detection.json``,
+    :func:`suvtwin.pipeline.lateral_detection.monte_carlo_study`), or None."""
     from suvtwin.estimators.tire_pressure import PAPER_TABLE_3
     from suvtwin.mjcf.vehicle import load_vehicle
 
@@ -499,6 +502,11 @@ def write_report(
 
     if road_estimation:
         parts.extend(_road_estimation_html(road_estimation))
+
+    if lateral_detection:
+        from suvtwin.pipeline.report.lateral_detection import lateral_detection_html
+
+        parts.extend(lateral_detection_html(lateral_detection))
 
     parts.append("<h2>8. Reproduce</h2>")
     timings = summary.get("timings", {})
