@@ -126,7 +126,9 @@ __all__ = [
 N_STATES = 6
 N_OUTPUTS = 2
 ROAD = 4  # index of x_r in the state
-ERROR_INPUTS = ("body", "accelerations", "all")
+ERROR_INPUTS = ("body", "accelerations", "all", "mass", "printed")
+ORDERS = ("same-step", "delayed")
+CONSTRAINTS = ("R", "innovation")
 
 
 @dataclass(frozen=True)
@@ -451,6 +453,9 @@ class RoadEstimate:
         Kalman gain :math:`K_k` (eq. 12, 21), shared by all runs; NaN at k = 0.
     covariance : numpy.ndarray, shape (steps, 6, 6)
         :math:`P_{k|k}` (eq. 14), shared by all runs.
+    innovation_covariance : numpy.ndarray, shape (steps, 2, 2)
+        :math:`S_k = CP_{k|k-1}C^T + R` (eq. 12's bracket), m²/s⁴, shared by all runs; NaN at
+        k = 0.
     """
 
     states: np.ndarray
@@ -459,6 +464,7 @@ class RoadEstimate:
     residuals: np.ndarray
     gain: np.ndarray
     covariance: np.ndarray
+    innovation_covariance: np.ndarray
 
     @property
     def road(self) -> np.ndarray:
@@ -466,17 +472,23 @@ class RoadEstimate:
         return self.states[..., ROAD]
 
 
-def error_input_matrix(error_input: str) -> np.ndarray:
-    """G of the model error (module docstring), dimensionless.
+def error_input_matrix(error_input: str, model: DiscreteRoadModel | None = None) -> np.ndarray:
+    r"""G of the model error (module docstring), dimensionless.
 
-    ``"body"`` (6×1), ``"accelerations"`` (6×2), ``"all"`` (6×6).
+    ``"body"`` and ``"mass"`` (6×1, e₂), ``"accelerations"`` (6×2), ``"all"`` (6×6),
+    ``"printed"`` (6×1: eq. 7's G times its d of six equal entries, i.e. the row sums of
+    that G, :math:`A\mathbf 1 = [1, 0, 1, 0, 1, -a_1-a_2]^T`; needs `model`).
     """
-    if error_input == "body":
+    if error_input in ("body", "mass"):
         return np.eye(N_STATES)[:, [1]]
     if error_input == "accelerations":
         return np.eye(N_STATES)[:, [1, 3]]
     if error_input == "all":
         return np.eye(N_STATES)
+    if error_input == "printed":
+        if model is None:
+            raise InputError("error_input='printed' needs the model (its road model's a1, a2)")
+        return model.A.sum(axis=1, keepdims=True)
     raise InputError(f"error_input must be one of {ERROR_INPUTS}, got {error_input!r}")
 
 
@@ -513,26 +525,36 @@ def stationary_covariance(model: DiscreteRoadModel) -> np.ndarray:
     return 0.5 * (P + P.T)
 
 
+@dataclass(frozen=True)
+class _MME:
+    """One reading of eq. 16-21 (see :func:`mme_kalman_filter`)."""
+
+    Gd: np.ndarray  # Gamma_d, (6, p): the error's effect on the state over one step
+    E: np.ndarray  # (2, p): the error's direct effect on the measured accelerations (0: none)
+    W: np.ndarray  # (p, p)
+    order: str  # "same-step" or "delayed"
+    scale_row: np.ndarray | None  # "mass": d multiplies the model's body acceleration A_2 x
+
+
 def _run(
     y: np.ndarray,
     model: DiscreteRoadModel,
     R: np.ndarray,
     P0: np.ndarray,
     x0: np.ndarray,
-    mme: tuple[np.ndarray, np.ndarray] | None,
+    mme: _MME | None,
 ) -> tuple[np.ndarray, ...]:
     Phi, Q, C = model.Phi, model.Q, model.C
     n_runs, n_steps, _ = y.shape
+    Ri = np.linalg.inv(R)
     if mme is None:
         p = 0
-        Gd = np.zeros((N_STATES, 0))
-        M = np.zeros((0, N_OUTPUTS))
+        Gd, E = np.zeros((N_STATES, 0)), np.zeros((N_OUTPUTS, 0))
     else:
-        Gd, W = mme
+        Gd, E = mme.Gd, mme.E
         p = Gd.shape[1]
-        D = C @ Gd  # eq. 18-19: D = T L_G(h) = C Gamma_d
-        Ri = np.linalg.inv(R)
-        M = np.linalg.solve(D.T @ Ri @ D + W, D.T @ Ri)  # eq. 19
+        D = C @ Gd + E  # eq. 18-19: D = T L_G(h) (+ E: the error in the measured accelerations)
+        M = np.linalg.solve(D.T @ Ri @ D + mme.W, D.T @ Ri)  # eq. 19
     CPhi = C @ Phi
     eye = np.eye(N_STATES)
     x = np.broadcast_to(x0, (n_runs, N_STATES)).copy()
@@ -542,8 +564,10 @@ def _run(
     out_resid = np.full((n_runs, n_steps, N_OUTPUTS), np.nan)
     out_d = np.full((n_runs, n_steps, p), np.nan)
     out_K = np.full((n_steps, N_STATES, N_OUTPUTS), np.nan)
+    out_S = np.full((n_steps, N_OUTPUTS, N_OUTPUTS), np.nan)
     out_P = np.empty((n_steps, N_STATES, N_STATES))
     out_x[:, 0], out_P[0] = x, P
+    d_prev = np.zeros((n_runs, p))
     for k in range(1, n_steps):
         P = Phi @ P @ Phi.T + Q  # eq. 11 / 21
         S = C @ P @ C.T + R
@@ -552,18 +576,35 @@ def _run(
         P = IKC @ P @ IKC.T + K @ R @ K.T  # eq. 14, Joseph form
         P = 0.5 * (P + P.T)
         pre = y[:, k] - x @ CPhi.T  # y_k - (y^p + S) of eq. 19
-        if p:
-            d = pre @ M.T  # eq. 19
-            out_d[:, k] = d
-            x = x @ Phi.T + d @ Gd.T  # eq. 21, first line
-            out_resid[:, k] = pre - d @ (C @ Gd).T  # y_k - yhat_k (eq. 17, 20)
-        else:
+        if p == 0:
             x = x @ Phi.T  # eq. 11
             out_resid[:, k] = pre
-        innov = y[:, k] - x @ C.T
+            innov = y[:, k] - x @ C.T
+        else:
+            if mme.scale_row is None:
+                d = pre @ M.T  # eq. 19
+                fit = d @ D.T
+            else:  # "mass": D_k = s_k D with s_k = A_2 x_(k-1|k-1), per run
+                s = x @ mme.scale_row
+                Ds = s[:, None] * D[:, 0]  # (runs, 2)
+                num = np.einsum("ri,ij,rj->r", Ds, Ri, pre)
+                den = np.einsum("ri,ij,rj->r", Ds, Ri, Ds) + mme.W[0, 0]
+                d = (num / den)[:, None]
+                fit = d * Ds
+            out_d[:, k] = d
+            out_resid[:, k] = pre - fit  # y_k - yhat_k (eq. 17, 20)
+            applied = d if mme.order == "same-step" else d_prev
+            if mme.scale_row is None:
+                x = x @ Phi.T + applied @ Gd.T  # eq. 21, first line
+                innov = y[:, k] - x @ C.T - applied @ E.T
+            else:
+                sa = (x @ mme.scale_row)[:, None] * applied
+                x = x @ Phi.T + sa @ Gd.T
+                innov = y[:, k] - x @ C.T - sa @ E.T
+            d_prev = d
         x = x + innov @ K.T  # eq. 13 / 21
-        out_x[:, k], out_innov[:, k], out_K[k], out_P[k] = x, innov, K, P
-    return out_x, out_innov, out_d, out_resid, out_K, out_P
+        out_x[:, k], out_innov[:, k], out_K[k], out_P[k], out_S[k] = x, innov, K, P, S
+    return out_x, out_innov, out_d, out_resid, out_K, out_P, out_S
 
 
 def _setup(y, model, measurement_std, state_covariance0, state0):
@@ -585,10 +626,11 @@ def _setup(y, model, measurement_std, state_covariance0, state0):
 
 
 def _estimate(out, single: bool) -> RoadEstimate:
-    x, innov, d, resid, K, P = out
+    x, innov, d, resid, K, P, S = out
     if single:
         x, innov, d, resid = x[0], innov[0], d[0], resid[0]
-    return RoadEstimate(states=x, innovations=innov, model_errors=d, residuals=resid, gain=K, covariance=P)
+    return RoadEstimate(states=x, innovations=innov, model_errors=d, residuals=resid, gain=K, covariance=P,
+                        innovation_covariance=S)
 
 
 def kalman_filter(
@@ -639,6 +681,16 @@ def _weight(weight: npt.ArrayLike, p: int) -> np.ndarray:
     return W
 
 
+def _mme_spec(model: DiscreteRoadModel, weight, error_input: str, feedthrough: bool, order: str) -> _MME:
+    G = error_input_matrix(error_input, model)
+    W = _weight(weight, G.shape[1])
+    if order not in ORDERS:
+        raise InputError(f"order must be one of {ORDERS}, got {order!r}")
+    E = G[[1, 3]].copy() if feedthrough else np.zeros((N_OUTPUTS, G.shape[1]))
+    scale = model.A[1].copy() if error_input == "mass" else None
+    return _MME(Gd=model.error_transition(G), E=E, W=W, order=order, scale_row=scale)
+
+
 def mme_kalman_filter(
     measurements: npt.ArrayLike,
     model: DiscreteRoadModel,
@@ -646,6 +698,8 @@ def mme_kalman_filter(
     measurement_std: npt.ArrayLike,
     weight: npt.ArrayLike,
     error_input: str = "all",
+    feedthrough: bool = False,
+    order: str = "same-step",
     state_covariance0: npt.ArrayLike | None = None,
     state0: npt.ArrayLike | None = None,
 ) -> RoadEstimate:
@@ -659,20 +713,29 @@ def mme_kalman_filter(
         W of eq. 16, positive definite, in 1/(unit of d)² (for acceleration errors
         (s²/m)²); a scalar means W·I. :func:`covariance_constraint_weight` gives eq. 20's
         choice.
-    error_input : {"body", "accelerations", "all"}, optional
+    error_input : {"body", "accelerations", "all", "mass", "printed"}, optional
         Where the model error enters (:func:`error_input_matrix`); default ``"all"``
-        (G = I). With ``"body"`` one d cannot fit both channels, eq. 20 cannot be met, and
-        a small W drifts without bound (docs/road_estimation.md, finding 3).
+        (G = I). ``"mass"``: a dimensionless d scales the model's body acceleration,
+        :math:`\ddot x_b = (1 + d)A_2x` (a sprung-mass error, d = −Δm/(m_b + Δm)).
+    feedthrough : bool, optional
+        If True, the measured accelerations contain the error too (they *are* the
+        accelerations the error changes): :math:`y_k = Cx_k + Ed_k + v_k` with E the
+        acceleration rows of G, so :math:`D = C\Gamma_d + E` in eq. 19 and the Kalman
+        update uses :math:`y_k - C\hat x_{k|k-1} - Ed_k`. Default False (eq. 6–7 as printed:
+        y = h(x)).
+    order : {"same-step", "delayed"}, optional
+        ``"same-step"`` (eq. 17, 21 as printed): d_k, fitted to y_k, corrects the prediction
+        of x_k, which the Kalman update then corrects with y_k again. ``"delayed"``: d_k
+        corrects the next prediction (x_{k+1}), so y_k is used once per step by each.
 
     Returns
     -------
     RoadEstimate
         With ``model_errors`` :math:`d_k` (eq. 19).
     """
-    G = error_input_matrix(error_input)
-    W = _weight(weight, G.shape[1])
     y, single, R, P0, x0 = _setup(measurements, model, measurement_std, state_covariance0, state0)
-    return _estimate(_run(y, model, R, P0, x0, (model.error_transition(G), W)), single)
+    spec = _mme_spec(model, weight, error_input, feedthrough, order)
+    return _estimate(_run(y, model, R, P0, x0, spec), single)
 
 
 def covariance_constraint_weight(
@@ -681,31 +744,49 @@ def covariance_constraint_weight(
     *,
     measurement_std: npt.ArrayLike,
     error_input: str = "all",
+    feedthrough: bool = False,
+    order: str = "same-step",
+    target: str = "R",
+    state_covariance0: npt.ArrayLike | None = None,
+    state0: npt.ArrayLike | None = None,
     bounds: tuple[float, float] = (1e-12, 1e12),
     iterations: int = 40,
     skip: int = 0,
 ) -> float:
-    r"""The scalar W (times I) of eq. 20: post-fit residuals with the noise's covariance.
+    r"""The scalar W (times I) of eq. 20: post-fit residuals with the expected covariance.
 
-    Finds w with :math:`\overline{r_k^TR^{-1}r_k} = 2` (the number of measurements), where
-    :math:`r_k = y_k - \hat y_k` is the MME fit's residual (eq. 17) averaged over all runs
-    and steps after `skip`, by bisection on log w. The residual grows with w (w → ∞ is the
-    plain KF's one-step prediction error). Uses the measurements only, never the truth.
+    Finds w with :math:`\overline{r_k^T\Sigma_k^{-1}r_k} = 2` (the number of measurements),
+    where :math:`r_k = y_k - \hat y_k` is the MME fit's residual (eq. 17) averaged over all
+    runs and steps after `skip`, by bisection on log w. ``target="R"``:
+    :math:`\Sigma_k = R` (eq. 20 as printed; Mook & Junkins' MME has no process noise, so
+    all of the residual beyond R is model error). ``target="innovation"``:
+    :math:`\Sigma_k = S_k = CP_{k|k-1}C^T + R`, the covariance the Kalman filter expects of
+    its one-step prediction error (the road's process noise included): with a correct
+    model the KF meets it already and w goes to the upper bound (d = 0, the KF). The
+    residual grows with w (w → ∞ is the plain KF's one-step prediction error). Uses the
+    measurements only, never the truth.
 
     Returns
     -------
     float
-        w, in 1/(unit of d)². If even w at the upper bound leaves residuals below R, the
-        upper bound; at the lower bound above R, the lower bound.
+        w, in 1/(unit of d)². If even w at the upper bound leaves residuals below the
+        target, the upper bound; at the lower bound above it, the lower bound.
     """
     y, _ = _measurements(measurements)
+    if target not in CONSTRAINTS:
+        raise InputError(f"target must be one of {CONSTRAINTS}, got {target!r}")
     lo, hi = np.log(bounds[0]), np.log(bounds[1])
+    R = _measurement_covariance(measurement_std)
 
     def excess(logw: float) -> float:
-        r = mme_kalman_filter(y, model, measurement_std=measurement_std, weight=np.exp(logw),
-                              error_input=error_input).residuals[:, max(skip, 1):]
-        Ri = np.linalg.inv(_measurement_covariance(measurement_std))
-        return float(np.mean(np.einsum("rki,ij,rkj->rk", r, Ri, r))) - N_OUTPUTS
+        est = mme_kalman_filter(y, model, measurement_std=measurement_std, weight=np.exp(logw),
+                                error_input=error_input, feedthrough=feedthrough, order=order,
+                                state_covariance0=state_covariance0, state0=state0)
+        k0 = max(skip, 1)
+        r = est.residuals[:, k0:]
+        Si = np.linalg.inv(est.innovation_covariance[k0:]) if target == "innovation" else \
+            np.broadcast_to(np.linalg.inv(R), (r.shape[1], N_OUTPUTS, N_OUTPUTS))
+        return float(np.mean(np.einsum("rki,kij,rkj->rk", r, Si, r))) - N_OUTPUTS
 
     if excess(hi) <= 0.0:
         return float(np.exp(hi))
