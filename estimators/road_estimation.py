@@ -488,7 +488,8 @@ def error_input_matrix(error_input: str, model: DiscreteRoadModel | None = None)
     if error_input == "printed":
         if model is None:
             raise InputError("error_input='printed' needs the model (its road model's a1, a2)")
-        return model.A.sum(axis=1, keepdims=True)
+        # the row sums of eq. 7's G: rows 2 and 4 are 0 exactly (the forces of a common shift)
+        return np.array([[1.0], [0.0], [1.0], [0.0], [1.0], [model.A[5, 4] + model.A[5, 5]]])
     raise InputError(f"error_input must be one of {ERROR_INPUTS}, got {error_input!r}")
 
 
@@ -533,6 +534,7 @@ class _MME:
     E: np.ndarray  # (2, p): the error's direct effect on the measured accelerations (0: none)
     W: np.ndarray  # (p, p)
     order: str  # "same-step" or "delayed"
+    fit: str  # eq. 16's residual weight: "R" (as printed) or "innovation" (S_k^-1)
     scale_row: np.ndarray | None  # "mass": d multiplies the model's body acceleration A_2 x
 
 
@@ -576,6 +578,9 @@ def _run(
         P = IKC @ P @ IKC.T + K @ R @ K.T  # eq. 14, Joseph form
         P = 0.5 * (P + P.T)
         pre = y[:, k] - x @ CPhi.T  # y_k - (y^p + S) of eq. 19
+        if p and mme.fit == "innovation":
+            Ri = np.linalg.inv(S)
+            M = np.linalg.solve(D.T @ Ri @ D + mme.W, D.T @ Ri)
         if p == 0:
             x = x @ Phi.T  # eq. 11
             out_resid[:, k] = pre
@@ -681,14 +686,17 @@ def _weight(weight: npt.ArrayLike, p: int) -> np.ndarray:
     return W
 
 
-def _mme_spec(model: DiscreteRoadModel, weight, error_input: str, feedthrough: bool, order: str) -> _MME:
+def _mme_spec(model: DiscreteRoadModel, weight, error_input: str, feedthrough: bool, order: str,
+              fit: str) -> _MME:
     G = error_input_matrix(error_input, model)
     W = _weight(weight, G.shape[1])
     if order not in ORDERS:
         raise InputError(f"order must be one of {ORDERS}, got {order!r}")
+    if fit not in CONSTRAINTS:
+        raise InputError(f"fit must be one of {CONSTRAINTS}, got {fit!r}")
     E = G[[1, 3]].copy() if feedthrough else np.zeros((N_OUTPUTS, G.shape[1]))
     scale = model.A[1].copy() if error_input == "mass" else None
-    return _MME(Gd=model.error_transition(G), E=E, W=W, order=order, scale_row=scale)
+    return _MME(Gd=model.error_transition(G), E=E, W=W, order=order, fit=fit, scale_row=scale)
 
 
 def mme_kalman_filter(
@@ -697,9 +705,10 @@ def mme_kalman_filter(
     *,
     measurement_std: npt.ArrayLike,
     weight: npt.ArrayLike,
-    error_input: str = "all",
-    feedthrough: bool = False,
+    error_input: str = "body",
+    feedthrough: bool = True,
     order: str = "same-step",
+    fit: str = "R",
     state_covariance0: npt.ArrayLike | None = None,
     state0: npt.ArrayLike | None = None,
 ) -> RoadEstimate:
@@ -727,6 +736,10 @@ def mme_kalman_filter(
         ``"same-step"`` (eq. 17, 21 as printed): d_k, fitted to y_k, corrects the prediction
         of x_k, which the Kalman update then corrects with y_k again. ``"delayed"``: d_k
         corrects the next prediction (x_{k+1}), so y_k is used once per step by each.
+    fit : {"R", "innovation"}, optional
+        The residual's weight in eq. 16: :math:`R^{-1}` (as printed, default) or
+        :math:`S_k^{-1}`, the inverse of the covariance the KF expects of the one-step
+        prediction error (the road's process noise included).
 
     Returns
     -------
@@ -734,7 +747,7 @@ def mme_kalman_filter(
         With ``model_errors`` :math:`d_k` (eq. 19).
     """
     y, single, R, P0, x0 = _setup(measurements, model, measurement_std, state_covariance0, state0)
-    spec = _mme_spec(model, weight, error_input, feedthrough, order)
+    spec = _mme_spec(model, weight, error_input, feedthrough, order, fit)
     return _estimate(_run(y, model, R, P0, x0, spec), single)
 
 
@@ -743,10 +756,11 @@ def covariance_constraint_weight(
     model: DiscreteRoadModel,
     *,
     measurement_std: npt.ArrayLike,
-    error_input: str = "all",
-    feedthrough: bool = False,
+    error_input: str = "body",
+    feedthrough: bool = True,
     order: str = "same-step",
-    target: str = "R",
+    fit: str = "R",
+    target: str = "innovation",
     state_covariance0: npt.ArrayLike | None = None,
     state0: npt.ArrayLike | None = None,
     bounds: tuple[float, float] = (1e-12, 1e12),
@@ -780,7 +794,7 @@ def covariance_constraint_weight(
 
     def excess(logw: float) -> float:
         est = mme_kalman_filter(y, model, measurement_std=measurement_std, weight=np.exp(logw),
-                                error_input=error_input, feedthrough=feedthrough, order=order,
+                                error_input=error_input, feedthrough=feedthrough, order=order, fit=fit,
                                 state_covariance0=state_covariance0, state0=state0)
         k0 = max(skip, 1)
         r = est.residuals[:, k0:]
