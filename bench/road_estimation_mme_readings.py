@@ -4,7 +4,7 @@ Usage: ``python bench/road_estimation_mme_readings.py [n_seeds]`` (default 10 se
 
 Prints JSON. Same simulation and settings as ``bench/road_estimation_paper.py`` (Table 1
 car, ISO B/C/D at 40 km/h, Δm = 0, +180, −180 kg, the filters keeping 410 kg; T = 1 ms,
-10 s, σ = 0.02 m/s², known start, Euler). Each reading is one choice of
+10 s, σ = 0.02 and 0.005 m/s², known start, Euler). Each reading is one choice of
 
 - ``error_input`` G: ``all`` (G = I), ``body`` (e₂), ``mass`` (e₂ scaled by the model's body
   acceleration, d = −Δm/(m_b + Δm)), ``printed`` (eq. 7's G times its six equal d);
@@ -53,6 +53,8 @@ from suvtwin.estimators.road_estimation import (
 )
 from suvtwin.roads.iso8608 import class_level
 
+SIGMAS = (SIGMA_MAIN, 0.005)  # m/s^2: the main table's and the sweep's lowest
+
 # name: (error_input, feedthrough, order, fit, W rule)
 READINGS = {
     "G=I, R (eq. 16-21 as printed, old default)": ("all", False, "same-step", "R", "R"),
@@ -61,12 +63,14 @@ READINGS = {
     "G=eq.7 printed, R": ("printed", False, "same-step", "R", "R"),
     "G=I, S": ("all", False, "same-step", "R", "innovation"),
     "G=I, fit S, S": ("all", False, "same-step", "innovation", "innovation"),
-    "G=I, feedthrough, fit S, S": ("all", True, "same-step", "innovation", "innovation"),
-    "G=e2, feedthrough, R": ("body", True, "same-step", "R", "R"),
-    "G=e2, feedthrough, S (default)": ("body", True, "same-step", "R", "innovation"),
-    "G=e2, feedthrough, S, delayed": ("body", True, "delayed", "R", "innovation"),
-    "G=[e2 e4], feedthrough, S": ("accelerations", True, "same-step", "R", "innovation"),
-    "mass, feedthrough, S": ("mass", True, "same-step", "R", "innovation"),
+    "G=I, fed through, fit S, S": ("all", True, "same-step", "innovation", "innovation"),
+    "G=e2, fed through, R": ("body", True, "same-step", "R", "R"),
+    "G=e2, fed through, S": ("body", True, "same-step", "R", "innovation"),
+    "G=e2, fed through, fit S, S all channels": ("body", True, "same-step", "innovation", "innovation-all"),
+    "G=e2, fed through, fit S, S (default)": ("body", True, "same-step", "innovation", "innovation"),
+    "G=e2, fed through, fit S, S, delayed": ("body", True, "delayed", "innovation", "innovation"),
+    "G=[e2 e4], fed through, fit S, S": ("accelerations", True, "same-step", "innovation", "innovation"),
+    "mass, fed through, fit S, S": ("mass", True, "same-step", "innovation", "innovation"),
 }
 
 
@@ -79,10 +83,9 @@ def _stats(e: np.ndarray) -> dict | str:
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     seeds = list(range(int(argv[0]) if argv else 10))
-    sigma = SIGMA_MAIN
     t0 = time.perf_counter()
     rows = []
-    for road_class in CLASSES:
+    for sigma, road_class in [(sg, c) for sg in SIGMAS for c in CLASSES]:
         gd, tag = class_level(road_class), CLASSES.index(road_class)
         z = _roads(gd, seeds, tag)
         road = iso_road_model(gd, speed=SPEED, n_low=BAND[0], n_high=BAND[1])
@@ -95,7 +98,7 @@ def main(argv: list[str] | None = None) -> int:
             y = acc + sigma * noise  # the same data as bench/road_estimation_paper.py
             kf = kalman_filter(y, model, measurement_std=sigma, state_covariance0=P0)
             e, S = kf.innovations[:, 1:], kf.innovation_covariance[1:]
-            row = {"class": road_class, "delta_m_kg": dm,
+            row = {"class": road_class, "delta_m_kg": dm, "sigma_mps2": sigma,
                    "paper": dict(zip(("KF", "MME&KF"), PAPER_TABLE2[road_class][dm], strict=True)),
                    "KF": _stats(error_std_percent(z, kf.road)),
                    "KF_NIS": round(float(np.mean(np.einsum("rki,kij,rkj->rk", e, np.linalg.inv(S), e))), 3),
@@ -120,8 +123,9 @@ def main(argv: list[str] | None = None) -> int:
                     r["true_d"] = round(-dm / (CAR.sprung_mass + dm), 4)
                 row["readings"][name] = r
             rows.append(row)
-            print(f"{road_class} {dm:+.0f} done {time.perf_counter() - t0:.0f}s", file=sys.stderr, flush=True)
-    print(json.dumps({"settings": {"sigma_mps2": sigma, "seeds": seeds, "dt_s": DT, "euler": True,
+            print(f"{sigma} {road_class} {dm:+.0f} done {time.perf_counter() - t0:.0f}s", file=sys.stderr,
+                  flush=True)
+    print(json.dumps({"settings": {"sigma_mps2": SIGMAS, "seeds": seeds, "dt_s": DT, "euler": True,
                                    "known_start": True, "W_window_samples": CONSTRAINT_WINDOW},
                       "readings": {k: dict(zip(("error_input", "feedthrough", "order", "fit", "W_rule"), v,
                                                strict=True)) for k, v in READINGS.items()},

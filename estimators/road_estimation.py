@@ -128,7 +128,8 @@ N_OUTPUTS = 2
 ROAD = 4  # index of x_r in the state
 ERROR_INPUTS = ("body", "accelerations", "all", "mass", "printed")
 ORDERS = ("same-step", "delayed")
-CONSTRAINTS = ("R", "innovation")
+CONSTRAINTS = ("R", "innovation", "innovation-all")
+FITS = ("R", "innovation")
 
 
 @dataclass(frozen=True)
@@ -692,8 +693,8 @@ def _mme_spec(model: DiscreteRoadModel, weight, error_input: str, feedthrough: b
     W = _weight(weight, G.shape[1])
     if order not in ORDERS:
         raise InputError(f"order must be one of {ORDERS}, got {order!r}")
-    if fit not in CONSTRAINTS:
-        raise InputError(f"fit must be one of {CONSTRAINTS}, got {fit!r}")
+    if fit not in FITS:
+        raise InputError(f"fit must be one of {FITS}, got {fit!r}")
     E = G[[1, 3]].copy() if feedthrough else np.zeros((N_OUTPUTS, G.shape[1]))
     scale = model.A[1].copy() if error_input == "mass" else None
     return _MME(Gd=model.error_transition(G), E=E, W=W, order=order, fit=fit, scale_row=scale)
@@ -708,7 +709,7 @@ def mme_kalman_filter(
     error_input: str = "body",
     feedthrough: bool = True,
     order: str = "same-step",
-    fit: str = "R",
+    fit: str = "innovation",
     state_covariance0: npt.ArrayLike | None = None,
     state0: npt.ArrayLike | None = None,
 ) -> RoadEstimate:
@@ -759,7 +760,7 @@ def covariance_constraint_weight(
     error_input: str = "body",
     feedthrough: bool = True,
     order: str = "same-step",
-    fit: str = "R",
+    fit: str = "innovation",
     target: str = "innovation",
     state_covariance0: npt.ArrayLike | None = None,
     state0: npt.ArrayLike | None = None,
@@ -792,15 +793,28 @@ def covariance_constraint_weight(
     lo, hi = np.log(bounds[0]), np.log(bounds[1])
     R = _measurement_covariance(measurement_std)
 
+    spec = _mme_spec(model, 1.0, error_input, feedthrough, order, fit)
+    D = model.C @ spec.Gd + spec.E
+    rank = int(np.linalg.matrix_rank(D, tol=1e-12 * max(1.0, float(np.abs(D).max()))))
+    if target == "innovation" and rank == 0:
+        return float(bounds[1])  # d reaches no measurement: nothing to fit (eq. 7's G as printed)
+
     def excess(logw: float) -> float:
         est = mme_kalman_filter(y, model, measurement_std=measurement_std, weight=np.exp(logw),
                                 error_input=error_input, feedthrough=feedthrough, order=order, fit=fit,
                                 state_covariance0=state_covariance0, state0=state0)
         k0 = max(skip, 1)
         r = est.residuals[:, k0:]
-        Si = np.linalg.inv(est.innovation_covariance[k0:]) if target == "innovation" else \
-            np.broadcast_to(np.linalg.inv(R), (r.shape[1], N_OUTPUTS, N_OUTPUTS))
-        return float(np.mean(np.einsum("rki,kij,rkj->rk", r, Si, r))) - N_OUTPUTS
+        if target == "R":
+            Si, dof = np.broadcast_to(np.linalg.inv(R), (r.shape[1], N_OUTPUTS, N_OUTPUTS)), N_OUTPUTS
+        else:
+            Si, dof = np.linalg.inv(est.innovation_covariance[k0:]), N_OUTPUTS
+            if target == "innovation" and rank < N_OUTPUTS:
+                # the part of r that d can reach: S^-1 D (D^T S^-1 D)^-1 D^T S^-1, rank D
+                SiD = Si @ D
+                Si = SiD @ np.linalg.solve(D.T @ SiD, np.swapaxes(SiD, 1, 2))
+                dof = rank
+        return float(np.mean(np.einsum("rki,kij,rkj->rk", r, Si, r))) - dof
 
     if excess(hi) <= 0.0:
         return float(np.exp(hi))
