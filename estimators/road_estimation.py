@@ -5,7 +5,8 @@ Usual call::
     road = iso_road_model(class_level("C"), speed=40 / 3.6)
     model = discretize(PAPER_QUARTER_CAR, road, dt=1e-3, method="euler")
     kf = kalman_filter(y, model, measurement_std=0.05)                       # eq. 8–15
-    mme = mme_kalman_filter(y, model, measurement_std=0.05, weight=30.0)     # eq. 16–21
+    w = covariance_constraint_weight(y[:2001], model, measurement_std=0.05)  # eq. 20
+    mme = mme_kalman_filter(y, model, measurement_std=0.05, weight=w)        # eq. 16–21
     kf.states[..., 4]   # (runs, steps): the road elevation estimate x̂_r, m
 
 The method of Wang et al. 2017 [1]_. A linear quarter car (sprung mass :math:`m_b`,
@@ -25,36 +26,47 @@ the dynamics through a matrix :math:`G`,
 :math:`\hat x_{k|k-1} = \Phi\hat x_{k-1|k-1} + \Gamma_d d_k` (eq. 21, :math:`\Gamma_d = TG`
 for Euler), chosen to minimize (eq. 16)
 
-.. math:: J(d_k) = \tfrac12 (y_k - \hat y_k)^T R^{-1}(y_k - \hat y_k)
-   + \tfrac12 d_k^T W d_k,\qquad \hat y_k = C\Phi\hat x_{k-1|k-1} + C\Gamma_d d_k
+.. math:: J(d_k) = \tfrac12 (y_k - \hat y_k)^T \Sigma^{-1}(y_k - \hat y_k)
+   + \tfrac12 d_k^T W d_k,\qquad \hat y_k = C\Phi\hat x_{k-1|k-1} + Dd_k
 
 (eq. 17–18: :math:`h + T L_f h = C(I + AT)x = C\Phi x`, :math:`T L_G h = TCG`), whose
 minimizer is eq. 19,
-:math:`d_k = (D^TR^{-1}D + W)^{-1}D^TR^{-1}(y_k - C\Phi\hat x_{k-1|k-1})`,
-:math:`D = C\Gamma_d`. Then the Kalman update with :math:`y_k` follows (eq. 21).
+:math:`d_k = (D^T\Sigma^{-1}D + W)^{-1}D^T\Sigma^{-1}(y_k - C\Phi\hat x_{k-1|k-1})`.
+Then the Kalman update with :math:`y_k - \hat y` follows (eq. 21).
 
-The weight :math:`W`. It trades the fit of the measurements against the size of the
-model error: :math:`W \to \infty` gives :math:`d = 0`, the plain KF; :math:`W \to 0` lets
-:math:`d` absorb every innovation. Eq. 20 is Mook & Junkins' covariance constraint: pick
-:math:`W` so that the post-fit residuals :math:`y_k - \hat y_k` have the covariance of the
-measurement noise, :math:`R`. :func:`covariance_constraint_weight` finds that :math:`W`
-(a scalar times a fixed shape) by bisection from the measurements alone (it never sees the
-true road). The paper keeps :math:`W` constant (its remark after eq. 20); so do we.
+The reading (docs/road_estimation.md, "The MME&KF: readings", has the ones tried and their
+numbers). Three choices the paper leaves open or prints in a form that cannot work:
 
-The model-error matrix :math:`G`. The paper's eq. 7 prints a 6×6 :math:`G` copied from
-:math:`A` (row 2 divided by a sector bound :math:`f_{1i}`) times a vector :math:`d` whose
-six entries are all the same, :math:`(f_{1i}/m_b)\,dm_b`: as printed :math:`Gd` adds
-:math:`d` times the row sums of that matrix, which is not a mass error. A sprung-mass
-error changes the body's acceleration (row 2 of :math:`A`) and, through the suspension
-force, nothing else directly. We offer ``error_input="body"`` (:math:`G = e_2`, :math:`d`
-an acceleration error of the body, m/s², the mass error's direct effect),
-``"accelerations"`` (:math:`G = [e_2, e_4]`, body and wheel) and ``"all"``
-(:math:`G = I_6`, Mook & Junkins' generic model error on every state) and say which one a
-result used. ``"all"`` is the default: the only one for which eq. 20 can be met.
+- **Where the error enters** (``error_input``, :func:`error_input_matrix`). Eq. 7 prints
+  :math:`G` copied from :math:`A` times a :math:`d` of six equal entries; that product is
+  :math:`d\,A\mathbf 1 = d\,[1, 0, 1, 0, 1, -a_1-a_2]^T`, a common shift of body, wheel and
+  road which no acceleration sees (:math:`D = 0`: the MME&KF is the KF, ``"printed"``). A
+  sprung-mass error changes the body's acceleration and nothing else directly: default
+  ``"body"``, :math:`G = e_2`, d an acceleration error of the body, m/s². Also
+  ``"mass"`` (d the relative change of the body's acceleration, eq. 7's
+  :math:`d = dm_b/m_b` read as a mass ratio), ``"accelerations"`` (:math:`[e_2, e_4]`),
+  ``"all"`` (:math:`G = I`, Mook & Junkins' generic error).
+- **The measured accelerations contain the error** (``feedthrough``, default True). The
+  outputs of eq. 2 are the accelerations :math:`\dot x_2, \dot x_4` themselves; eq. 6 adds
+  :math:`\varepsilon_2` to :math:`\dot x_2` but writes :math:`y_1` without it. An
+  accelerometer measures the true acceleration, error included: :math:`y = Cx + Ed + v`
+  with E the acceleration rows of G, so :math:`D = C\Gamma_d + E`. Without it, d reaches
+  y only through :math:`TCG` (:math:`\sim 10^{-3}`) and a small W integrates the road's
+  unpredictability into a diverging "body error".
+- **The covariance of the one-step residual** (``fit`` and the ``target`` of
+  :func:`covariance_constraint_weight`). Mook & Junkins' MME has no process noise: with
+  a perfect model the residual's covariance is R, so eq. 16 weights it by
+  :math:`R^{-1}` and eq. 20 asks the post-fit residuals for R. Inside a Kalman filter the
+  prediction :math:`C\Phi\hat x_{k-1|k-1}` is itself uncertain (the road's process noise,
+  the state's error): the residual of a correct model has covariance
+  :math:`S_k = CP_{k|k-1}C^T + R` (eq. 12's bracket). Default: :math:`\Sigma = S_k` in
+  eq. 16, and eq. 20 asks the part of the residual d can reach (its
+  :math:`S_k`-projection on the columns of D) for :math:`S_k`: with a correct model the
+  KF meets it already and W goes to its upper bound (d = 0, the KF). ``fit="R"``,
+  ``target="R"``: as printed.
 
-Measured (docs/road_estimation.md): eq. 21's covariance ignores the correction
-:math:`\Gamma_d d_k` it injects, so a small W turns the road's unpredictability into an
-uncorrected drift; with a correct model the MME can only add error to the KF.
+W is constant (the paper's remark after eq. 20), found from the measurements alone by
+bisection (:func:`covariance_constraint_weight`); it never sees the truth.
 
 Errors of the paper corrected here (and why)
 --------------------------------------------
@@ -67,7 +79,10 @@ Errors of the paper corrected here (and why)
   :math:`PC^T(CPC^T+R)^{-1}`, as eq. 21 has it.
 - Eq. 15 writes :math:`\hat x_r(k) = \hat x_r(k-1) + \dots`; it is the fifth row of eq. 13,
   :math:`\hat x_r(k|k) = \hat x_r(k|k-1) + K_{5,:}(y_k - C\hat x_{k|k-1})`.
-- Eq. 7's :math:`G` and :math:`d` (above): replaced by an explicit error-input matrix.
+- Eq. 7's :math:`G` and :math:`d` (above): replaced by an explicit error-input matrix
+  (the printed product is kept as ``error_input="printed"``: it changes nothing).
+- Eq. 6 writes the measured accelerations without the model error they contain (above:
+  ``feedthrough``).
 - Eq. 3 sets the road model's right-hand side to 0; a road then decays to zero. The road
   is the model's response to white noise :math:`w_r` (eq. 4's :math:`w`), whose intensity
   and :math:`a_1, a_2` the paper does not give: :func:`iso_road_model` sets them so that
@@ -737,10 +752,10 @@ def mme_kalman_filter(
         ``"same-step"`` (eq. 17, 21 as printed): d_k, fitted to y_k, corrects the prediction
         of x_k, which the Kalman update then corrects with y_k again. ``"delayed"``: d_k
         corrects the next prediction (x_{k+1}), so y_k is used once per step by each.
-    fit : {"R", "innovation"}, optional
-        The residual's weight in eq. 16: :math:`R^{-1}` (as printed, default) or
-        :math:`S_k^{-1}`, the inverse of the covariance the KF expects of the one-step
-        prediction error (the road's process noise included).
+    fit : {"innovation", "R"}, optional
+        The residual's weight in eq. 16: :math:`S_k^{-1}` (default), the inverse of the
+        covariance the KF expects of the one-step prediction error (the road's process
+        noise and the state's uncertainty included), or :math:`R^{-1}` (as printed).
 
     Returns
     -------
@@ -770,22 +785,30 @@ def covariance_constraint_weight(
 ) -> float:
     r"""The scalar W (times I) of eq. 20: post-fit residuals with the expected covariance.
 
-    Finds w with :math:`\overline{r_k^T\Sigma_k^{-1}r_k} = 2` (the number of measurements),
-    where :math:`r_k = y_k - \hat y_k` is the MME fit's residual (eq. 17) averaged over all
-    runs and steps after `skip`, by bisection on log w. ``target="R"``:
-    :math:`\Sigma_k = R` (eq. 20 as printed; Mook & Junkins' MME has no process noise, so
-    all of the residual beyond R is model error). ``target="innovation"``:
-    :math:`\Sigma_k = S_k = CP_{k|k-1}C^T + R`, the covariance the Kalman filter expects of
-    its one-step prediction error (the road's process noise included): with a correct
-    model the KF meets it already and w goes to the upper bound (d = 0, the KF). The
-    residual grows with w (w → ∞ is the plain KF's one-step prediction error). Uses the
-    measurements only, never the truth.
+    Finds w with :math:`\overline{r_k^T\Sigma_k^{+}r_k} = m`, where
+    :math:`r_k = y_k - \hat y_k` is the MME fit's residual (eq. 17) averaged over all runs
+    and steps after `skip`, by bisection on log w. The residual grows with w (w → ∞ is the
+    plain KF's one-step prediction error).
+
+    ``target="innovation"`` (default): the part of the residual the error can reach, its
+    :math:`S_k`-projection on the columns of D,
+    :math:`\Sigma_k^{+} = S_k^{-1}D(D^TS_k^{-1}D)^{-1}D^TS_k^{-1}`, m = rank D, with
+    :math:`S_k = CP_{k|k-1}C^T + R` the covariance the Kalman filter expects of its
+    one-step prediction error (the road's process noise included). With a correct model
+    the KF meets it already and w goes to the upper bound (d = 0, the KF); residual the
+    error cannot reach (the wheel channel for G = e₂) does not push W down.
+    ``"innovation-all"``: :math:`\Sigma_k^{+} = S_k^{-1}`, m = 2. ``"R"``:
+    :math:`\Sigma_k^{+} = R^{-1}`, m = 2 (eq. 20 as printed; Mook & Junkins' MME has no
+    process noise, so all of the residual beyond R counts as model error, the road's
+    unpredictability included). Uses the measurements only, never the truth. The other
+    arguments as :func:`mme_kalman_filter`.
 
     Returns
     -------
     float
         w, in 1/(unit of d)². If even w at the upper bound leaves residuals below the
-        target, the upper bound; at the lower bound above it, the lower bound.
+        target (or d reaches no measurement), the upper bound; at the lower bound above
+        it, the lower bound.
     """
     y, _ = _measurements(measurements)
     if target not in CONSTRAINTS:
