@@ -17,9 +17,10 @@ KF, MME&KF) with the SUV as the truth:
   measured: the change of its mean tyre load / g);
 - filters: the SUV's front-left corner as a quarter car (``corner_quarter_car``: nominal
   mass share, linear wheel rate, mean low-speed damper rate, kt at 250 kPa), the road model
-  at the class level, Euler (eq. 7). KF (eq. 10–15); MME&KF with G = I and eq. 20's W from
-  the first 2 s of the filtered record (truth-free). Known start (the paper's eq. 10: x̂0 from
-  the run's state at 2 s) and, as a variant, unknown start (stationary prior);
+  at the class level, Euler (eq. 7). KF (eq. 10–15); MME&KF in the estimator's default
+  reading (G = e2 fed through to the measured body acceleration, eq. 16 weighted by S_k) with
+  eq. 20's W against S_k from the first 2 s of the filtered record (truth-free). Known start
+  (the paper's eq. 10: x̂0 from the run's state at 2 s) and, as a variant, unknown start (stationary prior);
 - truth: the heightfield under the tyre, raw (at the wheel centre) and enveloped (the tyre
   model's contact-patch mean), ``road_under_wheel``;
 - error STD % = 100·std(x̂_r − x_r)/std(x_r) (the paper's, each about its own mean), and the

@@ -18,15 +18,20 @@ signal about its own mean); mean and standard deviation over seeds
 
 Filters:
 - ``KF``: eq. 10–15 with the nominal car;
-- ``MME&KF_body``: eq. 16–21, the model error an acceleration of the body (G = e2, the
-  direct effect of a sprung-mass error), W = 1/σ_d² with σ_d = (180/410)·RMS(measured body
-  acceleration), the size of the error a 180 kg change makes (a prior, truth-free);
-- ``MME&KF_all``: eq. 16–21 with G = I (error on every state), W from eq. 20's covariance
-  constraint on the cell's first 2 s of measurements (truth-free).
+- ``MME&KF`` (the estimator's default reading, docs/road_estimation.md): the model error an
+  acceleration of the body (G = e2, the direct effect of a sprung-mass error) which the
+  measured body acceleration contains too; eq. 16's residual weighted by the KF's innovation
+  covariance S_k; W from eq. 20 against S_k on the cell's first 2 s of measurements
+  (truth-free);
+- ``MME&KF_mass``: the same with d the relative change of the body's acceleration
+  (ẍ_b = (1 + d)A₂x, d = −Δm/(m_b + Δm): eq. 7's d read as a mass ratio);
+- ``MME&KF_printed``: eq. 16–21 as printed (G = I, y = h(x), residual weight R⁻¹) with eq. 20
+  against R (the reading before; bench/road_estimation_mme_readings.py has the others).
 
 Further rows: the exact discretization; the filters started without knowing the initial
 state (stationary prior); road levels at the class band's edges (÷2, ×2 the centre); a W
-sweep (oracle: the best W is chosen on the scored runs, so optimistic); runtime.
+sweep (oracle: the best W is chosen on the scored runs, so optimistic); runtime. The variants
+run the KF and the default MME&KF.
 """
 
 from __future__ import annotations
@@ -85,14 +90,25 @@ def _known_start(road) -> np.ndarray:
     return np.diag([1e-12] * 5 + [road.intensity / (2.0 * road.a2)])
 
 
-def _stats(values: np.ndarray) -> dict:
+def _stats(values: np.ndarray) -> dict | str:
+    if not np.all(np.isfinite(values)) or np.mean(values) > 1e4:
+        return "diverged"
     return {"mean": float(f"{np.mean(values):.4g}"),
             "std": float(f"{np.std(values, ddof=1) if values.size > 1 else 0.0:.3g}")}
 
 
+# MME&KF readings (bench/road_estimation_mme_readings.py has more): name -> mme_kalman_filter options and
+# the target of eq. 20 (W found on each cell's first 2 s of measurements, truth-free)
+MME_READINGS = {
+    "MME&KF": ({"error_input": "body", "feedthrough": True, "fit": "innovation"}, "innovation"),  # default
+    "MME&KF_mass": ({"error_input": "mass", "feedthrough": True, "fit": "innovation"}, "innovation"),
+    "MME&KF_printed": ({"error_input": "all", "feedthrough": False, "fit": "R"}, "R"),  # eq. 16-21 as printed
+}
+
+
 def _cells(
     road_class: str, seeds: list[int], *, sigma: float, gd_n0: float | None = None, method: str = "euler",
-    known_start: bool = True, mme: bool = True,
+    known_start: bool = True, mme: tuple[str, ...] = tuple(MME_READINGS),
 ) -> list[dict]:
     """All three Δm of one class: truth, measurements, the filters; one row per Δm."""
     gd = class_level(road_class) if gd_n0 is None else gd_n0
@@ -106,28 +122,26 @@ def _cells(
         acc = simulate_quarter_car(CAR.with_sprung_mass(CAR.sprung_mass + dm), z, dt=DT).accelerations
         noise = np.stack([np.random.default_rng([s, tag, j, 2]).standard_normal((N_STEPS, 2)) for s in seeds])
         ys.append(acc + sigma * noise)
-    y = np.concatenate(ys)  # (3 * runs, steps, 2): the filters do not depend on Δm, one batch
+    y = np.concatenate(ys)  # (3 * runs, steps, 2): the KF does not depend on Δm, one batch
     truth = np.tile(z, (len(MASS_CHANGES), 1))
     n = len(seeds)
     err = {"KF": error_std_percent(truth, kalman_filter(y, model, measurement_std=sigma,
                                                         state_covariance0=P0).road)}
     weights = {}
-    if mme:
-        body_rms = float(np.sqrt(np.mean(y[..., 0] ** 2)))  # measured, truth-free
-        w_body = 1.0 / ((180.0 / CAR.sprung_mass) * body_rms) ** 2
-        err["MME&KF_body"] = error_std_percent(truth, mme_kalman_filter(
-            y, model, measurement_std=sigma, weight=w_body, error_input="body", state_covariance0=P0).road)
-        weights["MME&KF_body"] = [w_body] * len(MASS_CHANGES)
+    for name in mme:
+        opts, target = MME_READINGS[name]
         e_all, w_all = [], []
         for j in range(len(MASS_CHANGES)):
             yj = y[j * n:(j + 1) * n]
-            w = covariance_constraint_weight(yj[:, :CONSTRAINT_WINDOW], model, measurement_std=sigma,
-                                             error_input="all", bounds=(1e-6, 1e8), iterations=14)
+            with np.errstate(all="ignore"):
+                w = covariance_constraint_weight(yj[:, :CONSTRAINT_WINDOW], model, measurement_std=sigma,
+                                                 target=target, state_covariance0=P0, bounds=(1e-8, 1e12),
+                                                 iterations=16, **opts)
+                e_all.append(error_std_percent(z, mme_kalman_filter(
+                    yj, model, measurement_std=sigma, weight=w, state_covariance0=P0, **opts).road))
             w_all.append(w)
-            e_all.append(error_std_percent(z, mme_kalman_filter(
-                yj, model, measurement_std=sigma, weight=w, error_input="all", state_covariance0=P0).road))
-        err["MME&KF_all"] = np.concatenate(e_all)
-        weights["MME&KF_all"] = w_all
+        err[name] = np.concatenate(e_all)
+        weights[name] = w_all
     rows = []
     for j, dm in enumerate(MASS_CHANGES):
         row = {"class": road_class, "gd_n0_m3": gd, "delta_m_kg": dm, "sigma_mps2": sigma,
@@ -156,13 +170,17 @@ def _weight_sweep(seeds: list[int]) -> list[dict]:
         y = acc + SIGMA_MAIN * noise
         kf = float(np.mean(error_std_percent(z, kalman_filter(y, model, measurement_std=SIGMA_MAIN,
                                                               state_covariance0=P0).road)))
-        for error_input in ("body", "all"):
+        for error_input, feedthrough, fit in (("body", True, "innovation"), ("body", True, "R"),
+                                              ("body", False, "R"), ("all", False, "R")):
             for w in (1e-1, 1e0, 1e1, 1e2, 1e3, 1e4, 1e5):
                 with np.errstate(all="ignore"):
-                    e = error_std_percent(z, mme_kalman_filter(y, model, measurement_std=SIGMA_MAIN, weight=w,
-                                                               error_input=error_input,
-                                                               state_covariance0=P0).road)
-                out.append({"delta_m_kg": dm, "error_input": error_input, "W": w, "KF": round(kf, 2),
+                    est = mme_kalman_filter(y, model, measurement_std=SIGMA_MAIN, weight=w,
+                                            error_input=error_input, feedthrough=feedthrough, fit=fit,
+                                            state_covariance0=P0)
+                    e = error_std_percent(z, est.road)
+                out.append({"delta_m_kg": dm, "error_input": error_input, "feedthrough": feedthrough,
+                            "fit": fit, "W": w,
+                            "KF": round(kf, 2),
                             "MME&KF": float(f"{np.mean(e):.4g}") if np.all(np.isfinite(e)) else "diverged"})
     return out
 
@@ -177,7 +195,7 @@ def _speed() -> dict:
         y = rng.standard_normal((runs, N_STEPS, 2)) * 0.1
         for name, call in {
             "KF": lambda y=y: kalman_filter(y, model, measurement_std=SIGMA_MAIN),
-            "MME&KF": lambda y=y: mme_kalman_filter(y, model, measurement_std=SIGMA_MAIN, weight=10.0),
+            "MME&KF": lambda y=y: mme_kalman_filter(y, model, measurement_std=SIGMA_MAIN, weight=300.0),
         }.items():
             t0 = time.perf_counter()
             call()
@@ -197,13 +215,14 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     table2 = [row for c in CLASSES for row in _cells(c, seeds, sigma=SIGMA_MAIN)]
     noise_sweep = [row for sigma in SIGMA_SWEEP for c in CLASSES
-                   for row in _cells(c, seeds, sigma=sigma)]
-    exact = [row for c in CLASSES for row in _cells(c, seeds, sigma=SIGMA_MAIN, method="exact", mme=False)]
+                   for row in _cells(c, seeds, sigma=sigma, mme=("MME&KF", "MME&KF_printed"))]
+    exact = [row for c in CLASSES
+             for row in _cells(c, seeds, sigma=SIGMA_MAIN, method="exact", mme=("MME&KF",))]
     unknown_start = [row for c in CLASSES
-                     for row in _cells(c, seeds, sigma=SIGMA_MAIN, known_start=False, mme=False)]
+                     for row in _cells(c, seeds, sigma=SIGMA_MAIN, known_start=False, mme=("MME&KF",))]
     band_edges = [row | {"level": edge} for c in CLASSES
                   for edge, gd in zip(("lower", "upper"), class_bounds(c), strict=True)
-                  for row in _cells(c, seeds, sigma=SIGMA_MAIN, gd_n0=gd, mme=False)]
+                  for row in _cells(c, seeds, sigma=SIGMA_MAIN, gd_n0=gd, mme=("MME&KF",))]
     sweep = _weight_sweep(seeds)
     wall = time.perf_counter() - t0
     print(json.dumps({

@@ -5,7 +5,8 @@ Usual call::
     road = iso_road_model(class_level("C"), speed=40 / 3.6)
     model = discretize(PAPER_QUARTER_CAR, road, dt=1e-3, method="euler")
     kf = kalman_filter(y, model, measurement_std=0.05)                       # eq. 8–15
-    mme = mme_kalman_filter(y, model, measurement_std=0.05, weight=30.0)     # eq. 16–21
+    w = covariance_constraint_weight(y[:2001], model, measurement_std=0.05)  # eq. 20
+    mme = mme_kalman_filter(y, model, measurement_std=0.05, weight=w)        # eq. 16–21
     kf.states[..., 4]   # (runs, steps): the road elevation estimate x̂_r, m
 
 The method of Wang et al. 2017 [1]_. A linear quarter car (sprung mass :math:`m_b`,
@@ -25,36 +26,47 @@ the dynamics through a matrix :math:`G`,
 :math:`\hat x_{k|k-1} = \Phi\hat x_{k-1|k-1} + \Gamma_d d_k` (eq. 21, :math:`\Gamma_d = TG`
 for Euler), chosen to minimize (eq. 16)
 
-.. math:: J(d_k) = \tfrac12 (y_k - \hat y_k)^T R^{-1}(y_k - \hat y_k)
-   + \tfrac12 d_k^T W d_k,\qquad \hat y_k = C\Phi\hat x_{k-1|k-1} + C\Gamma_d d_k
+.. math:: J(d_k) = \tfrac12 (y_k - \hat y_k)^T \Sigma^{-1}(y_k - \hat y_k)
+   + \tfrac12 d_k^T W d_k,\qquad \hat y_k = C\Phi\hat x_{k-1|k-1} + Dd_k
 
 (eq. 17–18: :math:`h + T L_f h = C(I + AT)x = C\Phi x`, :math:`T L_G h = TCG`), whose
 minimizer is eq. 19,
-:math:`d_k = (D^TR^{-1}D + W)^{-1}D^TR^{-1}(y_k - C\Phi\hat x_{k-1|k-1})`,
-:math:`D = C\Gamma_d`. Then the Kalman update with :math:`y_k` follows (eq. 21).
+:math:`d_k = (D^T\Sigma^{-1}D + W)^{-1}D^T\Sigma^{-1}(y_k - C\Phi\hat x_{k-1|k-1})`.
+Then the Kalman update with :math:`y_k - \hat y` follows (eq. 21).
 
-The weight :math:`W`. It trades the fit of the measurements against the size of the
-model error: :math:`W \to \infty` gives :math:`d = 0`, the plain KF; :math:`W \to 0` lets
-:math:`d` absorb every innovation. Eq. 20 is Mook & Junkins' covariance constraint: pick
-:math:`W` so that the post-fit residuals :math:`y_k - \hat y_k` have the covariance of the
-measurement noise, :math:`R`. :func:`covariance_constraint_weight` finds that :math:`W`
-(a scalar times a fixed shape) by bisection from the measurements alone (it never sees the
-true road). The paper keeps :math:`W` constant (its remark after eq. 20); so do we.
+The reading (docs/road_estimation.md, "The MME&KF: readings", has the ones tried and their
+numbers). Three choices the paper leaves open or prints in a form that cannot work:
 
-The model-error matrix :math:`G`. The paper's eq. 7 prints a 6×6 :math:`G` copied from
-:math:`A` (row 2 divided by a sector bound :math:`f_{1i}`) times a vector :math:`d` whose
-six entries are all the same, :math:`(f_{1i}/m_b)\,dm_b`: as printed :math:`Gd` adds
-:math:`d` times the row sums of that matrix, which is not a mass error. A sprung-mass
-error changes the body's acceleration (row 2 of :math:`A`) and, through the suspension
-force, nothing else directly. We offer ``error_input="body"`` (:math:`G = e_2`, :math:`d`
-an acceleration error of the body, m/s², the mass error's direct effect),
-``"accelerations"`` (:math:`G = [e_2, e_4]`, body and wheel) and ``"all"``
-(:math:`G = I_6`, Mook & Junkins' generic model error on every state) and say which one a
-result used. ``"all"`` is the default: the only one for which eq. 20 can be met.
+- **Where the error enters** (``error_input``, :func:`error_input_matrix`). Eq. 7 prints
+  :math:`G` copied from :math:`A` times a :math:`d` of six equal entries; that product is
+  :math:`d\,A\mathbf 1 = d\,[1, 0, 1, 0, 1, -a_1-a_2]^T`, a common shift of body, wheel and
+  road which no acceleration sees (:math:`D = 0`: the MME&KF is the KF, ``"printed"``). A
+  sprung-mass error changes the body's acceleration and nothing else directly: default
+  ``"body"``, :math:`G = e_2`, d an acceleration error of the body, m/s². Also
+  ``"mass"`` (d the relative change of the body's acceleration, eq. 7's
+  :math:`d = dm_b/m_b` read as a mass ratio), ``"accelerations"`` (:math:`[e_2, e_4]`),
+  ``"all"`` (:math:`G = I`, Mook & Junkins' generic error).
+- **The measured accelerations contain the error** (``feedthrough``, default True). The
+  outputs of eq. 2 are the accelerations :math:`\dot x_2, \dot x_4` themselves; eq. 6 adds
+  :math:`\varepsilon_2` to :math:`\dot x_2` but writes :math:`y_1` without it. An
+  accelerometer measures the true acceleration, error included: :math:`y = Cx + Ed + v`
+  with E the acceleration rows of G, so :math:`D = C\Gamma_d + E`. Without it, d reaches
+  y only through :math:`TCG` (:math:`\sim 10^{-3}`) and a small W integrates the road's
+  unpredictability into a diverging "body error".
+- **The covariance of the one-step residual** (``fit`` and the ``target`` of
+  :func:`covariance_constraint_weight`). Mook & Junkins' MME has no process noise: with
+  a perfect model the residual's covariance is R, so eq. 16 weights it by
+  :math:`R^{-1}` and eq. 20 asks the post-fit residuals for R. Inside a Kalman filter the
+  prediction :math:`C\Phi\hat x_{k-1|k-1}` is itself uncertain (the road's process noise,
+  the state's error): the residual of a correct model has covariance
+  :math:`S_k = CP_{k|k-1}C^T + R` (eq. 12's bracket). Default: :math:`\Sigma = S_k` in
+  eq. 16, and eq. 20 asks the part of the residual d can reach (its
+  :math:`S_k`-projection on the columns of D) for :math:`S_k`: with a correct model the
+  KF meets it already and W goes to its upper bound (d = 0, the KF). ``fit="R"``,
+  ``target="R"``: as printed.
 
-Measured (docs/road_estimation.md): eq. 21's covariance ignores the correction
-:math:`\Gamma_d d_k` it injects, so a small W turns the road's unpredictability into an
-uncorrected drift; with a correct model the MME can only add error to the KF.
+W is constant (the paper's remark after eq. 20), found from the measurements alone by
+bisection (:func:`covariance_constraint_weight`); it never sees the truth.
 
 Errors of the paper corrected here (and why)
 --------------------------------------------
@@ -67,7 +79,10 @@ Errors of the paper corrected here (and why)
   :math:`PC^T(CPC^T+R)^{-1}`, as eq. 21 has it.
 - Eq. 15 writes :math:`\hat x_r(k) = \hat x_r(k-1) + \dots`; it is the fifth row of eq. 13,
   :math:`\hat x_r(k|k) = \hat x_r(k|k-1) + K_{5,:}(y_k - C\hat x_{k|k-1})`.
-- Eq. 7's :math:`G` and :math:`d` (above): replaced by an explicit error-input matrix.
+- Eq. 7's :math:`G` and :math:`d` (above): replaced by an explicit error-input matrix
+  (the printed product is kept as ``error_input="printed"``: it changes nothing).
+- Eq. 6 writes the measured accelerations without the model error they contain (above:
+  ``feedthrough``).
 - Eq. 3 sets the road model's right-hand side to 0; a road then decays to zero. The road
   is the model's response to white noise :math:`w_r` (eq. 4's :math:`w`), whose intensity
   and :math:`a_1, a_2` the paper does not give: :func:`iso_road_model` sets them so that
@@ -126,7 +141,10 @@ __all__ = [
 N_STATES = 6
 N_OUTPUTS = 2
 ROAD = 4  # index of x_r in the state
-ERROR_INPUTS = ("body", "accelerations", "all")
+ERROR_INPUTS = ("body", "accelerations", "all", "mass", "printed")
+ORDERS = ("same-step", "delayed")
+CONSTRAINTS = ("R", "innovation", "innovation-all")
+FITS = ("R", "innovation")
 
 
 @dataclass(frozen=True)
@@ -451,6 +469,9 @@ class RoadEstimate:
         Kalman gain :math:`K_k` (eq. 12, 21), shared by all runs; NaN at k = 0.
     covariance : numpy.ndarray, shape (steps, 6, 6)
         :math:`P_{k|k}` (eq. 14), shared by all runs.
+    innovation_covariance : numpy.ndarray, shape (steps, 2, 2)
+        :math:`S_k = CP_{k|k-1}C^T + R` (eq. 12's bracket), m²/s⁴, shared by all runs; NaN at
+        k = 0.
     """
 
     states: np.ndarray
@@ -459,6 +480,7 @@ class RoadEstimate:
     residuals: np.ndarray
     gain: np.ndarray
     covariance: np.ndarray
+    innovation_covariance: np.ndarray
 
     @property
     def road(self) -> np.ndarray:
@@ -466,17 +488,24 @@ class RoadEstimate:
         return self.states[..., ROAD]
 
 
-def error_input_matrix(error_input: str) -> np.ndarray:
-    """G of the model error (module docstring), dimensionless.
+def error_input_matrix(error_input: str, model: DiscreteRoadModel | None = None) -> np.ndarray:
+    r"""G of the model error (module docstring), dimensionless.
 
-    ``"body"`` (6×1), ``"accelerations"`` (6×2), ``"all"`` (6×6).
+    ``"body"`` and ``"mass"`` (6×1, e₂), ``"accelerations"`` (6×2), ``"all"`` (6×6),
+    ``"printed"`` (6×1: eq. 7's G times its d of six equal entries, i.e. the row sums of
+    that G, :math:`A\mathbf 1 = [1, 0, 1, 0, 1, -a_1-a_2]^T`; needs `model`).
     """
-    if error_input == "body":
+    if error_input in ("body", "mass"):
         return np.eye(N_STATES)[:, [1]]
     if error_input == "accelerations":
         return np.eye(N_STATES)[:, [1, 3]]
     if error_input == "all":
         return np.eye(N_STATES)
+    if error_input == "printed":
+        if model is None:
+            raise InputError("error_input='printed' needs the model (its road model's a1, a2)")
+        # the row sums of eq. 7's G: rows 2 and 4 are 0 exactly (the forces of a common shift)
+        return np.array([[1.0], [0.0], [1.0], [0.0], [1.0], [model.A[5, 4] + model.A[5, 5]]])
     raise InputError(f"error_input must be one of {ERROR_INPUTS}, got {error_input!r}")
 
 
@@ -513,26 +542,37 @@ def stationary_covariance(model: DiscreteRoadModel) -> np.ndarray:
     return 0.5 * (P + P.T)
 
 
+@dataclass(frozen=True)
+class _MME:
+    """One reading of eq. 16-21 (see :func:`mme_kalman_filter`)."""
+
+    Gd: np.ndarray  # Gamma_d, (6, p): the error's effect on the state over one step
+    E: np.ndarray  # (2, p): the error's direct effect on the measured accelerations (0: none)
+    W: np.ndarray  # (p, p)
+    order: str  # "same-step" or "delayed"
+    fit: str  # eq. 16's residual weight: "R" (as printed) or "innovation" (S_k^-1)
+    scale_row: np.ndarray | None  # "mass": d multiplies the model's body acceleration A_2 x
+
+
 def _run(
     y: np.ndarray,
     model: DiscreteRoadModel,
     R: np.ndarray,
     P0: np.ndarray,
     x0: np.ndarray,
-    mme: tuple[np.ndarray, np.ndarray] | None,
+    mme: _MME | None,
 ) -> tuple[np.ndarray, ...]:
     Phi, Q, C = model.Phi, model.Q, model.C
     n_runs, n_steps, _ = y.shape
+    Ri = np.linalg.inv(R)
     if mme is None:
         p = 0
-        Gd = np.zeros((N_STATES, 0))
-        M = np.zeros((0, N_OUTPUTS))
+        Gd, E = np.zeros((N_STATES, 0)), np.zeros((N_OUTPUTS, 0))
     else:
-        Gd, W = mme
+        Gd, E = mme.Gd, mme.E
         p = Gd.shape[1]
-        D = C @ Gd  # eq. 18-19: D = T L_G(h) = C Gamma_d
-        Ri = np.linalg.inv(R)
-        M = np.linalg.solve(D.T @ Ri @ D + W, D.T @ Ri)  # eq. 19
+        D = C @ Gd + E  # eq. 18-19: D = T L_G(h) (+ E: the error in the measured accelerations)
+        M = np.linalg.solve(D.T @ Ri @ D + mme.W, D.T @ Ri)  # eq. 19
     CPhi = C @ Phi
     eye = np.eye(N_STATES)
     x = np.broadcast_to(x0, (n_runs, N_STATES)).copy()
@@ -542,8 +582,10 @@ def _run(
     out_resid = np.full((n_runs, n_steps, N_OUTPUTS), np.nan)
     out_d = np.full((n_runs, n_steps, p), np.nan)
     out_K = np.full((n_steps, N_STATES, N_OUTPUTS), np.nan)
+    out_S = np.full((n_steps, N_OUTPUTS, N_OUTPUTS), np.nan)
     out_P = np.empty((n_steps, N_STATES, N_STATES))
     out_x[:, 0], out_P[0] = x, P
+    d_prev = np.zeros((n_runs, p))
     for k in range(1, n_steps):
         P = Phi @ P @ Phi.T + Q  # eq. 11 / 21
         S = C @ P @ C.T + R
@@ -552,18 +594,38 @@ def _run(
         P = IKC @ P @ IKC.T + K @ R @ K.T  # eq. 14, Joseph form
         P = 0.5 * (P + P.T)
         pre = y[:, k] - x @ CPhi.T  # y_k - (y^p + S) of eq. 19
-        if p:
-            d = pre @ M.T  # eq. 19
-            out_d[:, k] = d
-            x = x @ Phi.T + d @ Gd.T  # eq. 21, first line
-            out_resid[:, k] = pre - d @ (C @ Gd).T  # y_k - yhat_k (eq. 17, 20)
-        else:
+        if p and mme.fit == "innovation":
+            Ri = np.linalg.inv(S)
+            M = np.linalg.solve(D.T @ Ri @ D + mme.W, D.T @ Ri)
+        if p == 0:
             x = x @ Phi.T  # eq. 11
             out_resid[:, k] = pre
-        innov = y[:, k] - x @ C.T
+            innov = y[:, k] - x @ C.T
+        else:
+            if mme.scale_row is None:
+                d = pre @ M.T  # eq. 19
+                fit = d @ D.T
+            else:  # "mass": D_k = s_k D with s_k = A_2 x_(k-1|k-1), per run
+                s = x @ mme.scale_row
+                Ds = s[:, None] * D[:, 0]  # (runs, 2)
+                num = np.einsum("ri,ij,rj->r", Ds, Ri, pre)
+                den = np.einsum("ri,ij,rj->r", Ds, Ri, Ds) + mme.W[0, 0]
+                d = (num / den)[:, None]
+                fit = d * Ds
+            out_d[:, k] = d
+            out_resid[:, k] = pre - fit  # y_k - yhat_k (eq. 17, 20)
+            applied = d if mme.order == "same-step" else d_prev
+            if mme.scale_row is None:
+                x = x @ Phi.T + applied @ Gd.T  # eq. 21, first line
+                innov = y[:, k] - x @ C.T - applied @ E.T
+            else:
+                sa = (x @ mme.scale_row)[:, None] * applied
+                x = x @ Phi.T + sa @ Gd.T
+                innov = y[:, k] - x @ C.T - sa @ E.T
+            d_prev = d
         x = x + innov @ K.T  # eq. 13 / 21
-        out_x[:, k], out_innov[:, k], out_K[k], out_P[k] = x, innov, K, P
-    return out_x, out_innov, out_d, out_resid, out_K, out_P
+        out_x[:, k], out_innov[:, k], out_K[k], out_P[k], out_S[k] = x, innov, K, P, S
+    return out_x, out_innov, out_d, out_resid, out_K, out_P, out_S
 
 
 def _setup(y, model, measurement_std, state_covariance0, state0):
@@ -585,10 +647,11 @@ def _setup(y, model, measurement_std, state_covariance0, state0):
 
 
 def _estimate(out, single: bool) -> RoadEstimate:
-    x, innov, d, resid, K, P = out
+    x, innov, d, resid, K, P, S = out
     if single:
         x, innov, d, resid = x[0], innov[0], d[0], resid[0]
-    return RoadEstimate(states=x, innovations=innov, model_errors=d, residuals=resid, gain=K, covariance=P)
+    return RoadEstimate(states=x, innovations=innov, model_errors=d, residuals=resid, gain=K, covariance=P,
+                        innovation_covariance=S)
 
 
 def kalman_filter(
@@ -639,13 +702,29 @@ def _weight(weight: npt.ArrayLike, p: int) -> np.ndarray:
     return W
 
 
+def _mme_spec(model: DiscreteRoadModel, weight, error_input: str, feedthrough: bool, order: str,
+              fit: str) -> _MME:
+    G = error_input_matrix(error_input, model)
+    W = _weight(weight, G.shape[1])
+    if order not in ORDERS:
+        raise InputError(f"order must be one of {ORDERS}, got {order!r}")
+    if fit not in FITS:
+        raise InputError(f"fit must be one of {FITS}, got {fit!r}")
+    E = G[[1, 3]].copy() if feedthrough else np.zeros((N_OUTPUTS, G.shape[1]))
+    scale = model.A[1].copy() if error_input == "mass" else None
+    return _MME(Gd=model.error_transition(G), E=E, W=W, order=order, fit=fit, scale_row=scale)
+
+
 def mme_kalman_filter(
     measurements: npt.ArrayLike,
     model: DiscreteRoadModel,
     *,
     measurement_std: npt.ArrayLike,
     weight: npt.ArrayLike,
-    error_input: str = "all",
+    error_input: str = "body",
+    feedthrough: bool = True,
+    order: str = "same-step",
+    fit: str = "innovation",
     state_covariance0: npt.ArrayLike | None = None,
     state0: npt.ArrayLike | None = None,
 ) -> RoadEstimate:
@@ -659,20 +738,33 @@ def mme_kalman_filter(
         W of eq. 16, positive definite, in 1/(unit of d)² (for acceleration errors
         (s²/m)²); a scalar means W·I. :func:`covariance_constraint_weight` gives eq. 20's
         choice.
-    error_input : {"body", "accelerations", "all"}, optional
+    error_input : {"body", "accelerations", "all", "mass", "printed"}, optional
         Where the model error enters (:func:`error_input_matrix`); default ``"all"``
-        (G = I). With ``"body"`` one d cannot fit both channels, eq. 20 cannot be met, and
-        a small W drifts without bound (docs/road_estimation.md, finding 3).
+        (G = I). ``"mass"``: a dimensionless d scales the model's body acceleration,
+        :math:`\ddot x_b = (1 + d)A_2x` (a sprung-mass error, d = −Δm/(m_b + Δm)).
+    feedthrough : bool, optional
+        If True, the measured accelerations contain the error too (they *are* the
+        accelerations the error changes): :math:`y_k = Cx_k + Ed_k + v_k` with E the
+        acceleration rows of G, so :math:`D = C\Gamma_d + E` in eq. 19 and the Kalman
+        update uses :math:`y_k - C\hat x_{k|k-1} - Ed_k`. Default False (eq. 6–7 as printed:
+        y = h(x)).
+    order : {"same-step", "delayed"}, optional
+        ``"same-step"`` (eq. 17, 21 as printed): d_k, fitted to y_k, corrects the prediction
+        of x_k, which the Kalman update then corrects with y_k again. ``"delayed"``: d_k
+        corrects the next prediction (x_{k+1}), so y_k is used once per step by each.
+    fit : {"innovation", "R"}, optional
+        The residual's weight in eq. 16: :math:`S_k^{-1}` (default), the inverse of the
+        covariance the KF expects of the one-step prediction error (the road's process
+        noise and the state's uncertainty included), or :math:`R^{-1}` (as printed).
 
     Returns
     -------
     RoadEstimate
         With ``model_errors`` :math:`d_k` (eq. 19).
     """
-    G = error_input_matrix(error_input)
-    W = _weight(weight, G.shape[1])
     y, single, R, P0, x0 = _setup(measurements, model, measurement_std, state_covariance0, state0)
-    return _estimate(_run(y, model, R, P0, x0, (model.error_transition(G), W)), single)
+    spec = _mme_spec(model, weight, error_input, feedthrough, order, fit)
+    return _estimate(_run(y, model, R, P0, x0, spec), single)
 
 
 def covariance_constraint_weight(
@@ -680,32 +772,72 @@ def covariance_constraint_weight(
     model: DiscreteRoadModel,
     *,
     measurement_std: npt.ArrayLike,
-    error_input: str = "all",
+    error_input: str = "body",
+    feedthrough: bool = True,
+    order: str = "same-step",
+    fit: str = "innovation",
+    target: str = "innovation",
+    state_covariance0: npt.ArrayLike | None = None,
+    state0: npt.ArrayLike | None = None,
     bounds: tuple[float, float] = (1e-12, 1e12),
     iterations: int = 40,
     skip: int = 0,
 ) -> float:
-    r"""The scalar W (times I) of eq. 20: post-fit residuals with the noise's covariance.
+    r"""The scalar W (times I) of eq. 20: post-fit residuals with the expected covariance.
 
-    Finds w with :math:`\overline{r_k^TR^{-1}r_k} = 2` (the number of measurements), where
+    Finds w with :math:`\overline{r_k^T\Sigma_k^{+}r_k} = m`, where
     :math:`r_k = y_k - \hat y_k` is the MME fit's residual (eq. 17) averaged over all runs
     and steps after `skip`, by bisection on log w. The residual grows with w (w → ∞ is the
-    plain KF's one-step prediction error). Uses the measurements only, never the truth.
+    plain KF's one-step prediction error).
+
+    ``target="innovation"`` (default): the part of the residual the error can reach, its
+    :math:`S_k`-projection on the columns of D,
+    :math:`\Sigma_k^{+} = S_k^{-1}D(D^TS_k^{-1}D)^{-1}D^TS_k^{-1}`, m = rank D, with
+    :math:`S_k = CP_{k|k-1}C^T + R` the covariance the Kalman filter expects of its
+    one-step prediction error (the road's process noise included). With a correct model
+    the KF meets it already and w goes to the upper bound (d = 0, the KF); residual the
+    error cannot reach (the wheel channel for G = e₂) does not push W down.
+    ``"innovation-all"``: :math:`\Sigma_k^{+} = S_k^{-1}`, m = 2. ``"R"``:
+    :math:`\Sigma_k^{+} = R^{-1}`, m = 2 (eq. 20 as printed; Mook & Junkins' MME has no
+    process noise, so all of the residual beyond R counts as model error, the road's
+    unpredictability included). Uses the measurements only, never the truth. The other
+    arguments as :func:`mme_kalman_filter`.
 
     Returns
     -------
     float
-        w, in 1/(unit of d)². If even w at the upper bound leaves residuals below R, the
-        upper bound; at the lower bound above R, the lower bound.
+        w, in 1/(unit of d)². If even w at the upper bound leaves residuals below the
+        target (or d reaches no measurement), the upper bound; at the lower bound above
+        it, the lower bound.
     """
     y, _ = _measurements(measurements)
+    if target not in CONSTRAINTS:
+        raise InputError(f"target must be one of {CONSTRAINTS}, got {target!r}")
     lo, hi = np.log(bounds[0]), np.log(bounds[1])
+    R = _measurement_covariance(measurement_std)
+
+    spec = _mme_spec(model, 1.0, error_input, feedthrough, order, fit)
+    D = model.C @ spec.Gd + spec.E
+    rank = int(np.linalg.matrix_rank(D, tol=1e-12 * max(1.0, float(np.abs(D).max()))))
+    if target == "innovation" and rank == 0:
+        return float(bounds[1])  # d reaches no measurement: nothing to fit (eq. 7's G as printed)
 
     def excess(logw: float) -> float:
-        r = mme_kalman_filter(y, model, measurement_std=measurement_std, weight=np.exp(logw),
-                              error_input=error_input).residuals[:, max(skip, 1):]
-        Ri = np.linalg.inv(_measurement_covariance(measurement_std))
-        return float(np.mean(np.einsum("rki,ij,rkj->rk", r, Ri, r))) - N_OUTPUTS
+        est = mme_kalman_filter(y, model, measurement_std=measurement_std, weight=np.exp(logw),
+                                error_input=error_input, feedthrough=feedthrough, order=order, fit=fit,
+                                state_covariance0=state_covariance0, state0=state0)
+        k0 = max(skip, 1)
+        r = est.residuals[:, k0:]
+        if target == "R":
+            Si, dof = np.broadcast_to(np.linalg.inv(R), (r.shape[1], N_OUTPUTS, N_OUTPUTS)), N_OUTPUTS
+        else:
+            Si, dof = np.linalg.inv(est.innovation_covariance[k0:]), N_OUTPUTS
+            if target == "innovation" and rank < N_OUTPUTS:
+                # the part of r that d can reach: S^-1 D (D^T S^-1 D)^-1 D^T S^-1, rank D
+                SiD = Si @ D
+                Si = SiD @ np.linalg.solve(D.T @ SiD, np.swapaxes(SiD, 1, 2))
+                dof = rank
+        return float(np.mean(np.einsum("rki,kij,rkj->rk", r, Si, r))) - dof
 
     if excess(hi) <= 0.0:
         return float(np.exp(hi))

@@ -243,7 +243,12 @@ def estimate_corner_road(
     constraint_window: int = 2001,
     weight: float | None = None,
 ) -> CornerRoadEstimate:
-    """Run the KF (eq. 10–15) or the MME&KF (eq. 16–21, G = I, W from eq. 20) on one corner.
+    """Run the KF (eq. 10–15) or the MME&KF (eq. 16–21) on one corner.
+
+    The MME&KF in the estimator's default reading: the model error an acceleration of the
+    body (G = e₂) that the measured body acceleration contains too, W from eq. 20 against the
+    KF's innovation covariance on the first `constraint_window` samples
+    (docs/road_estimation.md, "The MME&KF: readings").
 
     Parameters
     ----------
@@ -301,9 +306,8 @@ def estimate_corner_road(
     w = weight
     if w is None:
         w = covariance_constraint_weight(y[:constraint_window], model, measurement_std=sigma,
-                                         error_input="all", bounds=(1e-6, 1e8), iterations=14)
-    est = mme_kalman_filter(y, model, measurement_std=sigma, weight=w, error_input="all",
-                            state_covariance0=P0, state0=x0)
+                                         state_covariance0=P0, state0=x0, bounds=(1e-8, 1e12), iterations=16)
+    est = mme_kalman_filter(y, model, measurement_std=sigma, weight=w, state_covariance0=P0, state0=x0)
     return CornerRoadEstimate(road=est.road, estimate=est, weight=float(w))
 
 
@@ -485,9 +489,9 @@ def mujoco_study(
     """Wang et al. 2017's Table 2 on the MuJoCo SUV's front-left corner (docs/road_estimation.md).
 
     Per class and Δm, over `seeds`: the error STD % (100·std(x̂_r − x_r)/std(x_r)) of the KF
-    and the MME&KF (G = I, eq. 20's W on the first 2 s), known start, against the raw and the
-    enveloped heightfield under the tyre, and the same after :func:`highpass` at
-    :data:`HIGHPASS_CUTOFF_CYCLES_PER_M` × speed (``_hp``); the class of the true and the
+    and the MME&KF (G = e₂ fed through, eq. 20's W against S_k on the first 2 s), known
+    start, against the raw and the enveloped heightfield under the tyre, and the same after
+    :func:`highpass` at :data:`HIGHPASS_CUTOFF_CYCLES_PER_M` × speed (``_hp``); the class of the true and the
     estimated tracks; the front-left corner's measured share of Δm. `variants`: also the
     unknown start, the same KF on its own linear quarter car (the corner's share of Δm)
     driven by the same raw road, and the classes found by the KF with an unknown start and
@@ -600,7 +604,9 @@ def mujoco_study(
     return {
         "settings": {**STUDY_SETTINGS, "seeds": list(seeds),
                      "highpass_cycles_per_m": HIGHPASS_CUTOFF_CYCLES_PER_M,
-                     "filter_car": sources, "mme": "G = I, W from eq. 20 on the first 2 s",
+                     "filter_car": sources,
+                     "mme": "G = e2, fed through to the body acceleration; W from eq. 20 against S_k on "
+                            "the first 2 s",
                      "truth": "raw: heightfield at the wheel centre; "
                               "enveloped: the tyre model's contact-patch height",
                      "error_std": "100*std(xr_hat - xr)/std(xr) per run; mean and std over seeds"},

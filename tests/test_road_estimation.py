@@ -187,7 +187,7 @@ def test_mme_recovers_a_known_constant_model_error_without_noise():
     P0 = np.diag([1e-14] * 5 + [1e-6])
     sigma = 1e-3  # the filters' assumed noise; the data have none
     mme = mme_kalman_filter(y, model, measurement_std=sigma, weight=1e-9, error_input="body",
-                            state_covariance0=P0, state0=x[0])
+                            feedthrough=False, state_covariance0=P0, state0=x[0])  # y = h(x), eq. 6
     # no noise anywhere: the one-step fit sees only d0 (W = 1e-9 against D^T R^-1 D ~ 24)
     np.testing.assert_allclose(mme.model_errors[1:, 0], d0[0], rtol=1e-5)
     np.testing.assert_allclose(mme.road, x[:, 4], atol=1e-9)
@@ -210,8 +210,9 @@ def test_covariance_constraint_weight_meets_eq_20():
     rng = np.random.default_rng(6)
     sigma = 0.02
     y = _model_truth(model, 1500, rng=rng) @ model.C.T + sigma * rng.standard_normal((1500, 2))
-    w = covariance_constraint_weight(y, model, measurement_std=sigma, error_input="all", bounds=(1e-6, 1e8))
-    r = mme_kalman_filter(y, model, measurement_std=sigma, weight=w, error_input="all").residuals[1:]
+    opts = {"error_input": "all", "feedthrough": False}  # eq. 16-21 as printed, eq. 20 against R
+    w = covariance_constraint_weight(y, model, measurement_std=sigma, target="R", bounds=(1e-6, 1e8), **opts)
+    r = mme_kalman_filter(y, model, measurement_std=sigma, weight=w, **opts).residuals[1:]
     assert np.mean(np.sum(r**2, axis=-1)) / sigma**2 == pytest.approx(2.0, rel=1e-3)
 
 
