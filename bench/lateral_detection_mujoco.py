@@ -33,7 +33,7 @@ from pathlib import Path
 
 
 def main(argv: list[str] | None = None) -> dict:
-    from suvtwin.pipeline.lateral_detection import CASES, monte_carlo_study
+    from suvtwin.pipeline.lateral_detection import CALIBRATION_SLIP, CASES, monte_carlo_study
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=150, help="lane changes per tyre case (default 150)")
@@ -41,10 +41,14 @@ def main(argv: list[str] | None = None) -> dict:
     default_dir = Path(__file__).parent / "_runs" / "lateral_detection"
     parser.add_argument("--runs-dir", type=Path, default=default_dir)
     parser.add_argument("--case", choices=CASES, action="append", help="default: both")
+    parser.add_argument("--slip", choices=CALIBRATION_SLIP, default="detector",
+                        help="bank fit: per-axle against the detector's slip angles (default) or one tyre "
+                             "against the tyres' own")  # fmt: skip
     args = parser.parse_args(argv)
     if args.runs < 1 or args.jobs < 1:
         parser.error("--runs and --jobs must be >= 1")
-    study = monte_carlo_study(args.runs, args.runs_dir, jobs=args.jobs, cases=tuple(args.case or CASES))
+    study = monte_carlo_study(args.runs, args.runs_dir, jobs=args.jobs, cases=tuple(args.case or CASES),
+                               slip=args.slip)
     for case in study["cases"].values():
         if case["example"]:  # keep the printout short: no per-sample series
             for series in case["example"].values():

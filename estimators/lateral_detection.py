@@ -244,10 +244,14 @@ def deflated_wheels(number: int) -> tuple[bool, bool, bool, bool]:
 def bank_tires(
     number: int | None = None,
     *,
-    nominal: ArctanTire = NOMINAL_TIRE,
-    deflated: ArctanTire = DEFLATED_TIRE,
+    nominal: ArctanTire | tuple[ArctanTire, ArctanTire] = NOMINAL_TIRE,
+    deflated: ArctanTire | tuple[ArctanTire, ArctanTire] = DEFLATED_TIRE,
 ) -> np.ndarray:
     """Tyre parameters of the 16-model bank (eq. 5–6), or of one model of it.
+
+    `nominal` and `deflated` are one tyre for all four wheels (the paper's bank) or a pair
+    ``(front, rear)``: per-axle effective characteristics (e.g. fitted with the axles'
+    compliance steer folded in, as :func:`suvtwin.pipeline.lateral_detection.fit_bank` does).
 
     Returns
     -------
@@ -255,10 +259,14 @@ def bank_tires(
         ``(16, 4, 3)``: model (number − 1), wheel (:data:`WHEELS`), ``[k1, k2, k3]``; with
         ``number`` given, that model's ``(4, 3)``.
     """
+    nom = nominal if isinstance(nominal, tuple) else (nominal, nominal)
+    defl = deflated if isinstance(deflated, tuple) else (deflated, deflated)
+    if len(nom) != 2 or len(defl) != 2:
+        raise InputError("nominal and deflated must be one ArctanTire or a (front, rear) pair")
     table = np.empty((N_MODELS, 4, 3))
     for n in range(1, N_MODELS + 1):
         flags = deflated_wheels(n)
-        table[n - 1] = [deflated.as_array() if f else nominal.as_array() for f in flags]
+        table[n - 1] = [(defl[w // 2] if f else nom[w // 2]).as_array() for w, f in enumerate(flags)]
     return table if number is None else table[number - 1]
 
 
@@ -615,8 +623,8 @@ def detect_deflation(
     forgetting_rate: float,
     error_scale: tuple[float, float] = (1.0, 1.0),
     sideslip: npt.ArrayLike | None = None,
-    nominal: ArctanTire = NOMINAL_TIRE,
-    deflated: ArctanTire = DEFLATED_TIRE,
+    nominal: ArctanTire | tuple[ArctanTire, ArctanTire] = NOMINAL_TIRE,
+    deflated: ArctanTire | tuple[ArctanTire, ArctanTire] = DEFLATED_TIRE,
 ) -> DetectionResult:
     r"""Select the tyre-failure model of least cost among the 16 (Solmaz, Steps 2–9, eq. 5–15).
 
@@ -649,8 +657,9 @@ def detect_deflation(
     sideslip : array_like, (runs, steps) or (steps,), optional
         β in rad from elsewhere (the paper's "state observers can also be utilized"); if
         `None`, eq. 10's open-loop integral of the measurements.
-    nominal, deflated : ArctanTire, optional
-        The two tyre sets of the bank; default the paper's (Sec. IV).
+    nominal, deflated : ArctanTire or (ArctanTire, ArctanTire), optional
+        The two tyre sets of the bank, one tyre or a (front, rear) pair (:func:`bank_tires`);
+        default the paper's (Sec. IV).
 
     Returns
     -------

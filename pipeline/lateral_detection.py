@@ -70,6 +70,7 @@ __all__ = [
     "RunDetection",
     "TireBank",
     "CASES",
+    "CALIBRATION_SLIP",
     "SENSITIVITY_TIRE",
     "VARIANTS",
     "case_tire_file",
@@ -285,10 +286,16 @@ class TireBank:
             "tire_file": self.tire_file,
             "nominal_kpa": self.nominal_kpa,
             "deflated_kpa": self.deflated_kpa,
-            "nominal": {"k1": self.nominal.k1, "k2_n": self.nominal.k2, "k3_per_rad": self.nominal.k3},
-            "deflated": {"k1": self.deflated.k1, "k2_n": self.deflated.k2, "k3_per_rad": self.deflated.k3},
+            "nominal": _tire_dict(self.nominal),
+            "deflated": _tire_dict(self.deflated),
             "fit": self.fit,
         }
+
+
+def _tire_dict(tire: ArctanTire | tuple[ArctanTire, ArctanTire]) -> dict:
+    if isinstance(tire, tuple):
+        return {"front": _tire_dict(tire[0]), "rear": _tire_dict(tire[1])}
+    return {"k1": tire.k1, "k2_n": tire.k2, "k3_per_rad": tire.k3}
 
 
 def fit_arctan_tire(
@@ -324,29 +331,56 @@ def fit_arctan_tire(
     return ArctanTire(k1=float(k1), k2=float(k2), k3=float(k3)), info
 
 
-def _calibration_data(tire_file: str | None, pressure_kpa: float) -> tuple[np.ndarray, ...]:
+CALIBRATION_SLIP = ("detector", "tyre")
+"""Slip angles the bank's tyres are fitted against (:func:`fit_bank`): ``"detector"`` — eq. 8
+from the steering command, the true sideslip and the yaw rate (the detector's own coordinates:
+the effective axle characteristic, compliance and bump steer folded in); ``"tyre"`` — each tyre's
+own slip angle as the simulator records it."""
+
+
+def _calibration_data(tire_file: str | None, pressure_kpa: float, slip: str) -> tuple[np.ndarray, ...]:
     """Per-wheel (F_Z, α_paper, S) of the calibration lane changes, all tyres at `pressure_kpa`."""
+    from suvtwin.estimators.lateral_detection import slip_angles, wheel_loads
     from suvtwin.pipeline.simulator import simulate
 
-    fz, alpha, s = [], [], []
+    fz, alpha, s, axle = [], [], [], []
     for speed in CALIBRATION_SPEEDS_KMH:
         for direction in ("left", "right"):
             sc = lane_change_scenario(speed_kmh=speed, pressure_kpa=pressure_kpa, direction=direction,
                                       tire_file=tire_file)  # fmt: skip
-            cols = simulate(sc).columns
-            for c in CORNERS:
-                fz.append(cols[f"{c}_tire_fz_n"])
-                alpha.append(-cols[f"{c}_tire_slip_angle_rad"])  # MF sign → paper sign
+            result = simulate(sc)
+            cols = result.columns
+            if slip == "detector":
+                sig = detector_signals(result.table, accel="horizontal", noise=None)
+                modelled = slip_angles(sig["steer"], sig["true_sideslip"], sig["yaw_rate"], sig["speed"],
+                                       two_track_vehicle(sc))  # fmt: skip
+                loads = wheel_loads(sig["lateral_acceleration"], two_track_vehicle(sc))
+            for i, c in enumerate(CORNERS):
+                fz.append(loads[:, i] if slip == "detector" else cols[f"{c}_tire_fz_n"])
+                if slip == "detector":
+                    alpha.append(modelled[:, i])
+                else:
+                    alpha.append(-cols[f"{c}_tire_slip_angle_rad"])  # MF sign → paper sign
                 s.append(cols[f"{c}_tire_fy_n"])
-    return np.concatenate(fz), np.concatenate(alpha), np.concatenate(s)
+                axle.append(np.full(s[-1].size, i // 2))
+    return np.concatenate(fz), np.concatenate(alpha), np.concatenate(s), np.concatenate(axle)
 
 
 @functools.lru_cache(maxsize=8)
-def _fit_bank_cached(tire_file: str | None, digest: str, nominal_kpa: float, deflated_kpa: float) -> TireBank:
+def _fit_bank_cached(
+    tire_file: str | None, digest: str, nominal_kpa: float, deflated_kpa: float, slip: str
+) -> TireBank:
     fits = {}
     tires = {}
     for name, p in (("nominal", nominal_kpa), ("deflated", deflated_kpa)):
-        tires[name], fits[name] = fit_arctan_tire(*_calibration_data(tire_file, p))
+        fz, alpha, force, axle = _calibration_data(tire_file, p, slip)
+        if slip == "tyre":  # the paper's bank: one tyre on all four wheels
+            tires[name], fits[name] = fit_arctan_tire(fz, alpha, force)
+        else:  # per-axle effective characteristics: each axle's compliance steer is its own
+            pair = [fit_arctan_tire(fz[axle == a], alpha[axle == a], force[axle == a]) for a in (0, 1)]
+            tires[name] = (pair[0][0], pair[1][0])
+            fits[name] = {"front": pair[0][1], "rear": pair[1][1]}
+        fits[name]["slip_angles"] = slip
     return TireBank(nominal=tires["nominal"], deflated=tires["deflated"], nominal_kpa=nominal_kpa,
                     deflated_kpa=deflated_kpa, tire_file=tire_file or "(the SUV's)", fit=fits)  # fmt: skip
 
@@ -356,10 +390,14 @@ def fit_bank(
     *,
     nominal_kpa: float = NOMINAL_KPA,
     deflated_kpa: float = DEFLATED_KPA,
+    slip: str = "detector",
 ) -> TireBank:
     """The bank's nominal and deflated arctan tyres fitted to `tire_file` (default the SUV's .tir)
-    from simulator runs (module docstring). ~3 s; cached in memory by the file's content and
-    the simulator's code."""
+    from simulator runs (module docstring), against the slip angles `slip` names
+    (:data:`CALIBRATION_SLIP`). ~3 s; cached in memory by the file's content and the simulator's
+    code."""
+    if slip not in CALIBRATION_SLIP:
+        raise InputError(f"slip must be one of {CALIBRATION_SLIP}, got {slip!r}")
     from suvtwin.pipeline.campaign.cache import model_fingerprint
 
     for name, p in (("nominal_kpa", nominal_kpa), ("deflated_kpa", deflated_kpa)):
@@ -372,7 +410,7 @@ def fit_bank(
             raise InputError(f"tire_file {str(path)!r} does not exist")
         sha.update(path.read_bytes())
     return _fit_bank_cached(None if tire_file is None else str(tire_file), sha.hexdigest(),
-                            float(nominal_kpa), float(deflated_kpa))  # fmt: skip
+                            float(nominal_kpa), float(deflated_kpa), slip)  # fmt: skip
 
 
 # ------------------------------------------------------------------------ detection of one run
@@ -582,7 +620,12 @@ def score_rows(rows: list[dict], variant: str) -> dict:
 
 
 def monte_carlo_study(
-    n_runs: int, runs_dir: str | Path, *, jobs: int = 1, cases: tuple[str, ...] = CASES
+    n_runs: int,
+    runs_dir: str | Path,
+    *,
+    jobs: int = 1,
+    cases: tuple[str, ...] = CASES,
+    slip: str = "detector",
 ) -> dict:
     """The detector over `n_runs` ISO 3888-1 lane changes per tyre case (:func:`study_draw`).
 
@@ -590,6 +633,7 @@ def monte_carlo_study(
     :func:`suvtwin.pipeline.monitor_scenarios.simulate_cached`. Returns per case the fitted bank,
     the simulation cost, peak a_y and roll, per variant :func:`score_rows`, and an example run
     (the first with the front-left tyre deflated: its selected model over time per variant).
+    `slip`: how the bank is fitted (:data:`CALIBRATION_SLIP`, :func:`fit_bank`).
     """
     import multiprocessing
     import os
@@ -602,7 +646,7 @@ def monte_carlo_study(
     out = {"runs_per_case": n_runs, "cases": {}}
     for case in cases:
         started = time.perf_counter()
-        bank = fit_bank(case_tire_file(case))
+        bank = fit_bank(case_tire_file(case), slip=slip)
         fit_s = time.perf_counter() - started
         draws = [study_draw(i) for i in range(n_runs)]
         runs = [BenchRun(name=f"{case}-{d['i']}", set="lateral_detection", scenario=study_scenario(d, case))

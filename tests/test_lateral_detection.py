@@ -228,3 +228,21 @@ def test_given_sideslip_replaces_eq10():
     assert ideal.selected[0, -1] == 8
     with pytest.raises(InputError, match="sideslip"):
         detect_deflation(steer, SPEED, ay, r, CAR, dt=DT, sideslip=np.zeros(3), **cost)
+
+
+def test_a_per_axle_bank_puts_each_axles_tyre_on_its_wheels():
+    front_nom, rear_nom = ArctanTire(1.0, 6000.0, 10.0), ArctanTire(1.2, 9000.0, 16.0)
+    front_def, rear_def = ArctanTire(1.1, 5000.0, 8.0), ArctanTire(1.3, 8000.0, 13.0)
+    bank = bank_tires(nominal=(front_nom, rear_nom), deflated=(front_def, rear_def))
+    expected = {  # model number: the tyres of FL, FR, RL, RR written out by hand
+        8: (front_def, front_nom, rear_nom, rear_nom),
+        4: (front_nom, front_def, rear_nom, rear_nom),
+        3: (front_nom, front_nom, rear_def, rear_def),
+        9: (front_def, front_nom, rear_nom, rear_def),
+        16: (front_nom, front_nom, rear_nom, rear_nom),
+        15: (front_def, front_def, rear_def, rear_def),
+    }
+    for number, tyres in expected.items():
+        np.testing.assert_array_equal(bank[number - 1], [[t.k1, t.k2, t.k3] for t in tyres])
+    with pytest.raises(InputError, match="front, rear"):
+        bank_tires(nominal=(front_nom,), deflated=front_def)

@@ -272,3 +272,29 @@ def test_campaign_runs_the_study_on_request_and_caches_it(tmp_path, monkeypatch)
     assert not made2 and study2 == study and len(calls) == 1
     with pytest.raises(InputError, match="lateral_detection_runs"):
         preset("quick", lateral_detection_runs=-1)
+
+
+def test_fitted_axle_characteristics_fold_in_the_compliance_steer():
+    # The bank fitted in the detector's coordinates (eq. 8 slip from the steering command, eq. 7 loads)
+    # is an effective axle characteristic: a wheel that toes by c·S under its own side force S has,
+    # seen from the steering command, the cornering stiffness C/(1 + C·c) (front, toe out of the turn)
+    # or C/(1 − C·c) (rear, toe towards the force) — Pacejka 2012, sec. 1.3 (effective axle
+    # characteristics); Gillespie 1992, ch. 6. C is the tyre's own, from the tyre-frame fit.
+    from suvtwin.estimators.lateral_detection import wheel_loads
+    from suvtwin.pipeline.lateral_detection import fit_bank
+
+    steering = load_vehicle().steering
+    loads = wheel_loads(0.0, two_track_vehicle())
+    own, effective = fit_bank(slip="tyre"), fit_bank(slip="detector")
+    assert isinstance(effective.nominal, tuple) and not isinstance(own.nominal, tuple)
+
+    def stiffness(tire, fz):
+        return (tire.k1 - fz / tire.k2) * fz * tire.k3
+
+    front, rear = stiffness(own.nominal, loads[0]), stiffness(own.nominal, loads[2])
+    predicted_front = front / (1.0 + front * steering.compliance_steer_front)
+    predicted_rear = rear / (1.0 - rear * steering.compliance_steer_rear)
+    # the front also has bump steer (roll understeer), which the per-force formula leaves out: ≤ 8 %
+    assert stiffness(effective.nominal[0], loads[0]) == pytest.approx(predicted_front, rel=0.08)
+    assert stiffness(effective.nominal[1], loads[2]) == pytest.approx(predicted_rear, rel=0.05)
+    assert stiffness(effective.nominal[0], loads[0]) < 0.85 * front

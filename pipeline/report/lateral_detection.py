@@ -97,6 +97,21 @@ def _delay_figure(study: dict) -> str:
     return _png(fig)
 
 
+def _tire_text(t: dict) -> str:
+    if "front" in t:
+        return f"front {_tire_text(t['front'])}, rear {_tire_text(t['rear'])}"
+    return f"k₁ {t['k1']:.3f}, k₂ {t['k2_n']:.0f} N, k₃ {t['k3_per_rad']:.2f} /rad"
+
+
+def _bank_text(bank: dict) -> str:
+    slip = bank.get("fit", {}).get("nominal", {}).get("slip_angles", "tyre")
+    if slip == "detector":
+        how = "per-axle effective characteristics, fitted against the detector's eq. 8 slip and eq. 7 loads"
+    else:
+        how = "one tyre on all wheels, fitted against the tyres' own slip angles and loads"
+    return f"nominal {_tire_text(bank['nominal'])}; deflated {_tire_text(bank['deflated'])} ({how})"
+
+
 def lateral_detection_html(study: dict) -> list[str]:
     """HTML parts of the section (see the module docstring)."""
     from suvtwin.pipeline.report.page import _img, _table
@@ -129,18 +144,7 @@ def lateral_detection_html(study: dict) -> list[str]:
     parts.append(_table(pd.DataFrame(rows)))
     for case, c in study["cases"].items():
         parts.append(f"<h3>{html.escape(_CASE_LABELS.get(case, case))}</h3>")
-        nominal, deflated = c["bank"]["nominal"], c["bank"]["deflated"]
-        parts.append(
-            "<p>Fitted bank: nominal k₁ {:.3f}, k₂ {:.0f} N, k₃ {:.2f} /rad; "
-            "deflated k₁ {:.3f}, k₂ {:.0f} N, k₃ {:.2f} /rad.</p>".format(
-                nominal["k1"],
-                nominal["k2_n"],
-                nominal["k3_per_rad"],
-                deflated["k1"],
-                deflated["k2_n"],
-                deflated["k3_per_rad"],
-            )
-        )
+        parts.append(f"<p>Fitted bank: {_bank_text(c['bank'])}.</p>")
         for variant in ("roll_compensated", "esc_body"):
             matrix = c["variants"][variant]["confusion_truth_vs_final"]
             picks = sorted({int(p) for row in matrix.values() for p, n in row.items() if n})
