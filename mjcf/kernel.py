@@ -235,6 +235,7 @@ VEHICLE_BLOCKS = (
     ("max_brake", 1),
     ("preview_t", 1),
     ("preview_min", 1),
+    ("path_understeer", 1),
     ("cog_height", 1),
     ("contact_native", 1),
 )
@@ -259,6 +260,7 @@ V_DRAG = VEHICLE.drag
 V_KP_SPEED, V_KI_SPEED = VEHICLE.kp_speed, VEHICLE.ki_speed
 V_MAX_DRIVE, V_MAX_BRAKE = VEHICLE.max_drive, VEHICLE.max_brake
 V_PREVIEW_T, V_PREVIEW_MIN = VEHICLE.preview_t, VEHICLE.preview_min
+V_PATH_UNDERSTEER = VEHICLE.path_understeer
 V_COG_HEIGHT = VEHICLE.cog_height
 V_CONTACT_NATIVE = VEHICLE.contact_native
 
@@ -368,6 +370,7 @@ def pack_vehicle(vm) -> np.ndarray:
     out[V_KP_SPEED], out[V_KI_SPEED] = d.speed_gain, d.speed_integral_gain
     out[V_MAX_DRIVE], out[V_MAX_BRAKE] = d.max_drive_torque, d.max_brake_torque
     out[V_PREVIEW_T], out[V_PREVIEW_MIN] = d.preview_time, d.preview_min
+    out[V_PATH_UNDERSTEER] = d.path_understeer
     out[V_COG_HEIGHT] = c.cog_height
     out[V_CONTACT_NATIVE] = 1.0 if vm.contact == "native" else 0.0
     return out
@@ -541,7 +544,10 @@ def step_kernel(
         eta = np.arctan2(ty - ry, tx - rx) - yaw
         eta = np.arctan2(np.sin(eta), np.cos(eta))
         dist = np.hypot(tx - rx, ty - ry)
-        delta = np.arctan(2.0 * wb * np.sin(eta) / dist)
+        kappa = 2.0 * np.sin(eta) / dist  # curvature of the arc through the target point
+        delta = np.arctan(wb * kappa)
+        if mode[M_KIND] == MODE_PATH:  # the lane-change driver also steers for the car's understeer
+            delta += vp[V_PATH_UNDERSTEER] * speed * speed * kappa
     delta = min(max(delta, -vp[V_MAX_STEER]), vp[V_MAX_STEER])
     state[S_STEER] = delta
 

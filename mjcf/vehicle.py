@@ -122,6 +122,7 @@ class Driver:
     max_brake_torque: float
     preview_time: float
     preview_min: float
+    path_understeer: float
 
 
 _SECTIONS = {
