@@ -24,12 +24,12 @@ The sets (what issue 12 asks the monitor to be scored on):
   40–120 km/h, 60 s.
 - ``nominal_long``: all tyres at placard; a road of several segments (classes A–D, each level
   drawn in its band), a speed profile of holds and ramps in 30–130 km/h, 0–300 kg of load,
-  kept in its lane (straight); every `weave_every`-th run is a shorter open-loop weave (steering
-  series, lateral acceleration up to ~4 m/s²) instead. The simulator has no curved road (its
-  road is a straight 4 m wide strip, lane mode holds a straight line and open-loop steering drifts
-  on rough roads: measured 27 m in 120 s at 100 km/h on class D with zero steer, and a 30 s
-  weave on class D at 66 km/h reached 4.7 m), so the weave runs are short and the bench reports
-  how far they left the lane.
+  kept in its lane (straight); every `weave_every`-th run is a shorter weave instead: the driver
+  follows a sinusoidal path (steering mode ``path``, lateral acceleration up to ~4 m/s², swing
+  ≤ 0.7 m). The simulator has no curved road (its road is a straight 4 m wide strip, lane mode
+  holds a straight line, and open-loop steering drifts off the strip on rough roads: 27 m in
+  120 s at 100 km/h on class D with zero steer), so the weave runs are short and the bench
+  reports how far they left the lane.
 
 Loads: a total mass drawn uniformly in 0–300 kg split (flat Dirichlet) over one to three of
 the places where a SUV carries it (front passenger seat, rear seats, boot), positions from the
@@ -49,7 +49,7 @@ from pathlib import Path
 import numpy as np
 
 from suvtwin.errors import InputError
-from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
+from suvtwin.mjcf.vehicle import CORNERS
 from suvtwin.pipeline.scenario import END_MARGIN_M, START_MARGIN_M, Scenario, parse_scenario
 from suvtwin.roads.iso8608 import draw_level_in_class
 
@@ -232,23 +232,22 @@ def _warning(i: int, duration_s: float = 60.0, loss: float = 0.20) -> BenchRun:
     return BenchRun(name, "warning", _scenario(name, data), info)
 
 
-def _weave_series(rng: np.random.Generator, v_kmh: float, duration_s: float) -> tuple[list, float, float]:
-    """Road-wheel angle (bicycle model δ = L·a_y/v²) of a weave at 0.2–0.4 Hz whose lateral
-    acceleration amplitude is 1–4 m/s² but whose lateral swing a_y/ω² stays ≤ 0.7 m (the wheels
-    within the 4 m road strip unless the car drifts)."""
-    wheelbase = load_vehicle().wheelbase
+def _weave_path(rng: np.random.Generator, v_kmh: float, duration_s: float) -> tuple[list, float, float]:
+    """Reference path y(x) (m, from the car's start) of a weave at 0.2–0.4 Hz whose lateral
+    acceleration amplitude is 1–4 m/s² but whose lateral swing a_y/ω² stays ≤ 0.7 m, for the
+    driver's path mode: the driver holds the car on the 4 m road strip (an open-loop steering
+    series drifts off it; the 2026-12 SUV with its compliance steer drifted up to 19 m)."""
     v = v_kmh / 3.6
     f = float(rng.uniform(0.2, 0.4))
     omega = 2 * np.pi * f
     ay = min(float(rng.uniform(1.0, 4.0)), omega**2 * 0.7)
-    delta = wheelbase * ay / v**2
-    t = np.arange(0.0, duration_s + 1e-9, 0.05)
-    # sine, its amplitude raised over the first two periods: the heading then swings about zero
-    # instead of keeping the offset an abrupt start leaves (the lane stays where it started)
-    envelope = np.clip(t * f / 2.0, 0.0, 1.0)
-    angle = delta * envelope * np.sin(omega * t)
-    series = [[round(float(a), 3), float(d)] for a, d in zip(t, angle, strict=True)]
-    return series, ay / omega**2, ay
+    swing = ay / omega**2
+    x = np.arange(0.0, v * duration_s + 60.0, 1.0)
+    # the amplitude rises over the first two periods, so the weave starts smoothly
+    envelope = np.clip(x * f / (2.0 * v), 0.0, 1.0)
+    y = swing * envelope * np.sin(omega * x / v)
+    path = [[float(a), round(float(b), 4)] for a, b in zip(x, y, strict=True)]
+    return path, swing, ay
 
 
 def _nominal_long(i: int, duration_s: float, weave_every: int, weave_duration_s: float) -> BenchRun:
@@ -259,9 +258,9 @@ def _nominal_long(i: int, duration_s: float, weave_every: int, weave_duration_s:
     data: dict = {"seed": seed, "pressure_kpa": placard, "load": load}
     if weave:
         v = round(float(rng.uniform(30.0, 130.0)), 2)
-        series, swing, ay = _weave_series(rng, v, weave_duration_s)
+        path, swing, ay = _weave_path(rng, v, weave_duration_s)
         data.update(duration_s=weave_duration_s, speed_kmh=v,
-                    steering={"mode": "series", "series": series, "lane_y_m": 0.0})  # fmt: skip
+                    steering={"mode": "path", "path": path, "lane_y_m": 0.0})  # fmt: skip
         distance = v / 3.6 * weave_duration_s
         extra = {"speed_kmh": v, "weave": {"lateral_accel_mps2": ay, "swing_m": swing}}
     else:

@@ -93,7 +93,12 @@ def test_nominal_long_has_speed_changes_several_classes_and_weaves():
     runs = scenario_set("nominal_long", 8, duration_s=300.0, weave_every=4, weave_duration_s=30.0)
     lane = [r for r in runs if not r.info.get("weave")]
     weave = [r for r in runs if r.info.get("weave")]
-    assert len(weave) == 2 and all(r.scenario.steering.mode == "series" for r in weave)
+    assert len(weave) == 2 and all(r.scenario.steering.mode == "path" for r in weave)
+    for r in weave:  # the path's swing and lateral acceleration as drawn: a_y = swing·ω², within the strip
+        x, y = r.scenario.steering.reference_path()
+        assert np.max(np.abs(y)) == pytest.approx(r.info["weave"]["swing_m"], rel=0.02)
+        assert r.info["weave"]["swing_m"] <= 0.7 and 1.0 <= r.info["weave"]["lateral_accel_mps2"] <= 4.0
+        assert x[-1] >= r.scenario.distance_m()
     for r in runs:
         assert set(_pressures(r.scenario).values()) == {r.placard_kpa}
     for r in lane:
