@@ -26,7 +26,7 @@ from suvtwin.estimators.joint import LinearQuarterCar
 from suvtwin.estimators.quarter_car import sprung_mass_share
 from suvtwin.files import atomic_write, read_parquet_table
 from suvtwin.mjcf.tire import load_tire
-from suvtwin.mjcf.vehicle import CORNERS, GRAVITY, load_vehicle
+from suvtwin.mjcf.vehicle import CORNERS, GRAVITY, VehicleParams, load_vehicle
 from suvtwin.pipeline.estimator_registry import CornerSignals, estimate_columns, find_estimator
 from suvtwin.pipeline.scoring import PRESSURE_TOLERANCE_KPA, run_metrics
 from suvtwin.suspension_law import SuspensionLaw
@@ -150,9 +150,9 @@ def estimate_run(
     (``"synthetic"`` or ``"augmented"``; ignored by ``"joint"`` and ``"online"``)."""
     entry = find_estimator(estimator, road_input)
     frame, meta, dt = _load_run(path, corner, gaps=entry.tolerates_gaps)
-    vehicle = load_vehicle()
+    vehicle = run_vehicle(meta)
     load, tire_file = run_load_and_tire(meta, path)
-    ms = corner_sprung_mass(corner, load)
+    ms = corner_sprung_mass(corner, load, vehicle=vehicle)
     mus = vehicle.unsprung_mass[CORNERS.index(corner)]
     signals = CornerSignals(
         acc_sprung=frame[f"{corner}_accel_sprung_mps2"].to_numpy()[None, :],
@@ -166,7 +166,7 @@ def estimate_run(
         seeds=np.array([seed]),
         tire_file=tire_file,
         speed_series_mps=frame["speed_mps"].to_numpy(dtype=float)[None, :],
-        static_travel_m=corner_static_travel(corner, run_loads(meta)),
+        static_travel_m=corner_static_travel(corner, run_loads(meta), vehicle=vehicle),
     )
     batch = entry.run(signals)
     metadata = {
@@ -195,6 +195,12 @@ def run_load_and_tire(meta: dict, path: str | Path) -> tuple[float, str | None]:
     return float(sum(item.get("mass_kg", 0.0) for item in scenario.get("load", []))), tire_file
 
 
+def run_vehicle(meta: dict) -> VehicleParams:
+    """The vehicle a run was simulated with: the SUV's parameter file with the scenario's
+    ``vehicle`` overrides (from the run's metadata) applied."""
+    return load_vehicle(overrides=meta.get("scenario", {}).get("vehicle") or None)
+
+
 def run_loads(meta: dict) -> tuple[tuple[float, tuple[float, float, float]], ...]:
     """The extra loads of a run, from its metadata: (mass in kg, position in m from the chassis CoG,
     x forward, y left, z up) each."""
@@ -203,14 +209,15 @@ def run_loads(meta: dict) -> tuple[tuple[float, tuple[float, float, float]], ...
                  for i in items)  # fmt: skip
 
 
-def corner_static_travel(corner: str, loads=()) -> float:
+def corner_static_travel(corner: str, loads=(), *, vehicle: VehicleParams | None = None) -> float:
     """Static suspension compression (m) of the SUV's `corner` under extra `loads` (:func:`run_loads`).
 
     Each load's weight goes to the axles by its lever arms about them (a1, a2 from the CoG) and to
     an axle's wheels by its lateral offset over the track; the corner's spring
     (:class:`suvtwin.suspension_law.SuspensionLaw`, progression and stops included) carries that
-    force beyond its preload (:func:`suvtwin.suspension_law.static_travel`)."""
-    vehicle = load_vehicle()
+    force beyond its preload (:func:`suvtwin.suspension_law.static_travel`). `vehicle`: default
+    the SUV's parameter file (:func:`run_vehicle` gives a run's)."""
+    vehicle = vehicle or load_vehicle()
     chassis = vehicle.chassis
     front, left = corner.startswith("f"), corner.endswith("l")
     track = chassis.track_front if front else chassis.track_rear
@@ -222,9 +229,10 @@ def corner_static_travel(corner: str, loads=()) -> float:
     return float(suspension_law.static_travel(law, force))
 
 
-def corner_sprung_mass(corner: str, load_kg: float = 0.0) -> float:
-    """The SUV corner's sprung mass with `load_kg` of extra load, kg (paper 000 eq. 2)."""
-    vehicle = load_vehicle()
+def corner_sprung_mass(corner: str, load_kg: float = 0.0, *, vehicle: VehicleParams | None = None) -> float:
+    """The SUV corner's sprung mass with `load_kg` of extra load, kg (paper 000 eq. 2); `vehicle`
+    default the SUV's parameter file."""
+    vehicle = vehicle or load_vehicle()
     front = corner.startswith("f")
     return sprung_mass_share(
         vehicle.chassis.mass,
@@ -235,7 +243,12 @@ def corner_sprung_mass(corner: str, load_kg: float = 0.0) -> float:
 
 
 def linear_corner_model(
-    corner: str, sprung_mass: float, *, tire_file: str | Path | None = None, static_travel: float = 0.0
+    corner: str,
+    sprung_mass: float,
+    *,
+    tire_file: str | Path | None = None,
+    static_travel: float = 0.0,
+    vehicle: VehicleParams | None = None,
 ) -> LinearQuarterCar:
     """The SUV corner as a linear roll-plane corner model for the joint estimator.
 
@@ -249,8 +262,9 @@ def linear_corner_model(
     quarter car on a campaign's MuJoCo runs. `tire_file`: the tyre of the run (``.tir``, its radial
     damping), default the SUV's. The corner's non-linear spring and damper laws come with it
     (``suspension``) and `static_travel` (m, :func:`corner_static_travel`), for estimators that
-    linearize them at the measured travel (the online monitor)."""
-    vehicle = load_vehicle()
+    linearize them at the measured travel (the online monitor). `vehicle`: default the SUV's
+    parameter file (:func:`run_vehicle` gives a run's, its scenario overrides applied)."""
+    vehicle = vehicle or load_vehicle()
     s = vehicle.suspension
     i = CORNERS.index(corner)
     front = corner.startswith("f")

@@ -33,6 +33,7 @@ from suvtwin.pipeline.estimation import (
     linear_corner_model,
     run_load_and_tire,
     run_loads,
+    run_vehicle,
 )
 from suvtwin.tire_stiffness import tire_stiffness_of
 
@@ -50,14 +51,15 @@ class MonitorResult:
     update: MonitorUpdate
 
 
-def corner_models(corners: tuple[str, ...], *, loads=(), tire_file: str | Path | None = None):
+def corner_models(corners: tuple[str, ...], *, loads=(), tire_file: str | Path | None = None, vehicle=None):
     """The SUV's linear corner models of `corners` with extra `loads` on the chassis ((kg, (x, y, z) m)
     each, :func:`suvtwin.pipeline.estimation.run_loads`): their total mass shared as in paper 000
-    eq. 2, and each corner's static travel under them."""
+    eq. 2, and each corner's static travel under them. `vehicle`: default the SUV's parameter
+    file (:func:`suvtwin.pipeline.estimation.run_vehicle` gives a run's)."""
     load_kg = float(sum(m for m, _ in loads))
     return [
-        linear_corner_model(c, corner_sprung_mass(c, load_kg), tire_file=tire_file,
-                            static_travel=corner_static_travel(c, loads))
+        linear_corner_model(c, corner_sprung_mass(c, load_kg, vehicle=vehicle), tire_file=tire_file,
+                            static_travel=corner_static_travel(c, loads, vehicle=vehicle), vehicle=vehicle)
         for c in corners
     ]  # fmt: skip
 
@@ -74,12 +76,15 @@ def monitor_signals(
     config: MonitorConfig | None = None,
     chunk_s: float = 10.0,
     preview: bool = False,
+    vehicle=None,
 ) -> tuple[TyreMonitor, MonitorUpdate]:
     """Stream arrays through a new monitor in chunks of `chunk_s` s; the monitor and all its rows.
 
     `acc_sprung`, `acc_unsprung`: (T, C) in the order of `corners`; `loads`: the extra loads on the
     chassis, (kg, (x, y, z) m from the CoG) each (:func:`corner_models`); `preview`: fuse each rear
-    tyre with the front→rear preview of its track (when both its corners are monitored)."""
+    tyre with the front→rear preview of its track (when both its corners are monitored); `vehicle`:
+    the car's parameters (default the SUV's parameter file)."""
+    vehicle = vehicle or load_vehicle()
     t = np.asarray(t_s, dtype=float)
     if t.size < 2:
         raise InputError("a run needs at least two samples")
@@ -89,9 +94,9 @@ def monitor_signals(
     tracks = [(corners.index(f), corners.index(r)) for f, r in (("fl", "rl"), ("fr", "rr"))
               if f in corners and r in corners]  # fmt: skip
     monitor = TyreMonitor(
-        corner_models(corners, loads=loads, tire_file=tire_file), dt=dt, config=config,
+        corner_models(corners, loads=loads, tire_file=tire_file, vehicle=vehicle), dt=dt, config=config,
         tire=[tire_stiffness_of(tire_file)] * len(corners), names=corners,
-        tracks=tracks if preview else (), wheelbase_m=load_vehicle().wheelbase,
+        tracks=tracks if preview else (), wheelbase_m=vehicle.wheelbase,
     )  # fmt: skip
     step = max(int(round(chunk_s / dt)), 1)
     parts = [
@@ -151,7 +156,7 @@ def monitor_run(
     acc_u = frame[[f"{c}_accel_unsprung_mps2" for c in corners]].to_numpy(dtype=float)
     monitor, update = monitor_signals(
         t, frame["speed_mps"].to_numpy(dtype=float), acc_s, acc_u, corners=corners, loads=loads,
-        tire_file=tire_file, config=config, chunk_s=chunk_s, preview=preview,
+        tire_file=tire_file, config=config, chunk_s=chunk_s, preview=preview, vehicle=run_vehicle(meta),
     )  # fmt: skip
     rule = rule or DeflationRule()
     warn = deflation_warnings(

@@ -71,3 +71,36 @@ def test_bad_input_exits_2_and_writes_nothing(run_file, tmp_path, capsys, argv_e
     assert main(["monitor", str(run_file), "--out", str(out), *argv_extra]) == 2
     assert message in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_monitor_models_the_run_s_own_vehicle(tmp_path, monkeypatch):
+    # A run simulated with vehicle overrides is monitored with those overrides, not the parameter
+    # file's car: the corner models get the run's anti-roll rate, spring rate and chassis mass.
+    import suvtwin.pipeline.monitoring as monitoring
+    from suvtwin.mjcf.vehicle import load_vehicle
+    from suvtwin.pipeline.scenario import parse_scenario
+    from suvtwin.pipeline.simulator import simulate, write_run
+
+    overrides = {"suspension": {"anti_roll_front": 12000.0, "spring_rate_front": 36000.0},
+                 "chassis": {"mass": 1700.0}}  # fmt: skip
+    sc = parse_scenario({"duration_s": 12.0, "speed_kmh": 60, "seed": 4,
+                         "road": {"segments": [{"length_m": 260.0, "gd_n0": 2.56e-4}]},
+                         "vehicle": overrides})  # fmt: skip
+    path = tmp_path / "run.parquet"
+    write_run(simulate(sc), path)
+    seen = []
+    original = monitoring.corner_models
+
+    def spy(*args, **kwargs):
+        models = original(*args, **kwargs)
+        seen.append(models)
+        return models
+
+    monkeypatch.setattr(monitoring, "corner_models", spy)
+    monitoring.monitor_run(path, placard_kpa=250.0)
+    fl = seen[0][0]
+    default = load_vehicle()
+    assert fl.anti_roll == 12000.0 != default.suspension.anti_roll_front
+    assert fl.spring_rate == 36000.0
+    # paper 000 eq. 2 with the overridden chassis mass: m·a2/(2L), independent of the parameter file
+    assert fl.sprung_mass == pytest.approx(1700.0 * default.chassis.a2 / (2.0 * default.wheelbase), rel=1e-9)
