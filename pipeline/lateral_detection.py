@@ -352,9 +352,9 @@ def _calibration_data(tire_file: str | None, pressure_kpa: float, slip: str) -> 
             cols = result.columns
             if slip == "detector":
                 sig = detector_signals(result.table, accel="horizontal", noise=None)
-                modelled = slip_angles(sig["steer"], sig["true_sideslip"], sig["yaw_rate"], sig["speed"],
-                                       two_track_vehicle(sc))  # fmt: skip
-                loads = wheel_loads(sig["lateral_acceleration"], two_track_vehicle(sc))
+                car = two_track_vehicle(sc)
+                modelled = slip_angles(sig["steer"], sig["true_sideslip"], sig["yaw_rate"], sig["speed"], car)
+                loads = wheel_loads(sig["lateral_acceleration"], car)
             for i, c in enumerate(CORNERS):
                 fz.append(loads[:, i] if slip == "detector" else cols[f"{c}_tire_fz_n"])
                 if slip == "detector":
