@@ -1,6 +1,7 @@
 """Solmaz's 16-model deflation detector on the MuJoCo SUV: ISO 3888-1 double lane changes, Monte Carlo.
 
-Run: ``python bench/lateral_detection_mujoco.py [--runs 150] [--jobs 2] [--runs-dir DIR] [--case C]``
+Run: ``python bench/lateral_detection_mujoco.py [--runs 150] [--jobs 2] [--runs-dir DIR] [--case C]
+[--slip detector|tyre] [--rigid-steering]``
 — prints JSON (:func:`suvtwin.pipeline.lateral_detection.monte_carlo_study`).
 
 Two tyre cases: ``shipped`` (the SUV's .tir, whose cornering stiffness *rises* at low pressure,
@@ -33,7 +34,7 @@ from pathlib import Path
 
 
 def main(argv: list[str] | None = None) -> dict:
-    from suvtwin.pipeline.lateral_detection import CALIBRATION_SLIP, CASES, monte_carlo_study
+    from suvtwin.pipeline.lateral_detection import CALIBRATION_SLIP, CASES, RIGID_STEERING, monte_carlo_study
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=150, help="lane changes per tyre case (default 150)")
@@ -44,11 +45,16 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--slip", choices=CALIBRATION_SLIP, default="detector",
                         help="bank fit: per-axle against the detector's slip angles (default) or one tyre "
                              "against the tyres' own")  # fmt: skip
+    parser.add_argument("--rigid-steering", action="store_true",
+                        help="the SUV without its compliance and bump steer (RIGID_STEERING), runs in "
+                             "<runs-dir>/rigid_steering/")  # fmt: skip
     args = parser.parse_args(argv)
     if args.runs < 1 or args.jobs < 1:
         parser.error("--runs and --jobs must be >= 1")
-    study = monte_carlo_study(args.runs, args.runs_dir, jobs=args.jobs, cases=tuple(args.case or CASES),
-                               slip=args.slip)
+    runs_dir = args.runs_dir / "rigid_steering" if args.rigid_steering else args.runs_dir
+    vehicle = RIGID_STEERING if args.rigid_steering else None
+    study = monte_carlo_study(args.runs, runs_dir, jobs=args.jobs, cases=tuple(args.case or CASES),
+                              slip=args.slip, vehicle=vehicle)
     for case in study["cases"].values():
         if case["example"]:  # keep the printout short: no per-sample series
             for series in case["example"].values():

@@ -625,6 +625,7 @@ def detect_deflation(
     sideslip: npt.ArrayLike | None = None,
     nominal: ArctanTire | tuple[ArctanTire, ArctanTire] = NOMINAL_TIRE,
     deflated: ArctanTire | tuple[ArctanTire, ArctanTire] = DEFLATED_TIRE,
+    wheel_load: npt.ArrayLike | None = None,
 ) -> DetectionResult:
     r"""Select the tyre-failure model of least cost among the 16 (Solmaz, Steps 2–9, eq. 5–15).
 
@@ -660,6 +661,9 @@ def detect_deflation(
     nominal, deflated : ArctanTire or (ArctanTire, ArctanTire), optional
         The two tyre sets of the bank, one tyre or a (front, rear) pair (:func:`bank_tires`);
         default the paper's (Sec. IV).
+    wheel_load : array_like, (runs, steps, 4) or (steps, 4), optional
+        F_Z per wheel in N (FL, FR, RL, RR) from elsewhere (e.g. a simulator's true loads, a bound
+        on what a better load model could give); if `None`, eq. 7 from the measured a_y.
 
     Returns
     -------
@@ -698,7 +702,17 @@ def detect_deflation(
             beta_meas = np.broadcast_to(beta_meas, delta.shape)
         except ValueError as err:
             raise InputError(f"sideslip must broadcast to {delta.shape}, got {np.shape(sideslip)}") from err
-    fz = wheel_loads(ay, vehicle)[:, :, None, :]  # eq. 7, (runs, steps, 1, 4)
+    if wheel_load is None:
+        fz = wheel_loads(ay, vehicle)[:, :, None, :]  # eq. 7, (runs, steps, 1, 4)
+    else:
+        load = np.asarray(wheel_load, dtype=float)
+        try:
+            load = np.broadcast_to(load, (*delta.shape, 4))
+        except ValueError as err:
+            raise InputError(f"wheel_load must broadcast to {(*delta.shape, 4)}, got {load.shape}") from err
+        if not np.all(np.isfinite(load) & (load >= 0)):
+            raise InputError("wheel_load must be finite and >= 0 N")
+        fz = load[:, :, None, :]
     alpha = slip_angles(delta, beta_meas, r, vx, vehicle)[:, :, None, :]  # eq. 8
     tires = bank_tires(nominal=nominal, deflated=deflated)  # (16, 4, 3)
     s = lateral_tire_force(alpha, fz, tires)  # eq. 6, (runs, steps, 16, 4)

@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import json
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
@@ -71,6 +72,7 @@ __all__ = [
     "TireBank",
     "CASES",
     "CALIBRATION_SLIP",
+    "RIGID_STEERING",
     "SENSITIVITY_TIRE",
     "VARIANTS",
     "case_tire_file",
@@ -123,11 +125,13 @@ def lane_change_scenario(
     tire_file: str | Path | None = None,
     seed: int = 0,
     timestep_s: float = 1e-3,
+    vehicle: dict | None = None,
 ) -> Scenario:
     """An ISO 3888-1 double lane change on a flat road (:class:`~suvtwin.pipeline.scenario.Scenario`).
 
     :data:`RUN_IN_S` of straight driving before section 1 and :data:`RUN_OUT_S` after section 6
-    at `speed_kmh`, held by the speed controller; sampled at :data:`SAMPLE_RATE_HZ`.
+    at `speed_kmh`, held by the speed controller; sampled at :data:`SAMPLE_RATE_HZ`. `vehicle`:
+    the scenario's vehicle overrides (e.g. :data:`RIGID_STEERING`).
     """
     if not 10.0 <= speed_kmh <= 180.0:
         raise InputError(f"speed_kmh must be in [10, 180] km/h, got {speed_kmh!r}")
@@ -149,6 +153,8 @@ def lane_change_scenario(
         data["load"] = [{"mass_kg": load_kg, "position_m": list(load_position_m)}]
     if tire_file is not None:
         data["tire_file"] = str(tire_file)
+    if vehicle:
+        data["vehicle"] = vehicle
     return parse_scenario(data, source="lane change")
 
 
@@ -331,6 +337,11 @@ def fit_arctan_tire(
     return ArctanTire(k1=float(k1), k2=float(k2), k3=float(k3)), info
 
 
+RIGID_STEERING = {"steering": {"compliance_steer_front": 0.0, "bump_steer_front": 0.0,
+                               "compliance_steer_rear": 0.0}}  # fmt: skip
+"""Vehicle overrides that take the SUV's compliance and bump steer out: the wheels steer exactly as
+commanded, the kinematics the two-track model assumes (a sensitivity case of the study)."""
+
 CALIBRATION_SLIP = ("detector", "tyre")
 """Slip angles the bank's tyres are fitted against (:func:`fit_bank`): ``"detector"`` — eq. 8
 from the steering command, the true sideslip and the yaw rate (the detector's own coordinates:
@@ -338,7 +349,9 @@ the effective axle characteristic, compliance and bump steer folded in); ``"tyre
 own slip angle as the simulator records it."""
 
 
-def _calibration_data(tire_file: str | None, pressure_kpa: float, slip: str) -> tuple[np.ndarray, ...]:
+def _calibration_data(
+    tire_file: str | None, pressure_kpa: float, slip: str, vehicle: dict | None
+) -> tuple[np.ndarray, ...]:
     """Per-wheel (F_Z, α_paper, S) of the calibration lane changes, all tyres at `pressure_kpa`."""
     from suvtwin.estimators.lateral_detection import slip_angles, wheel_loads
     from suvtwin.pipeline.simulator import simulate
@@ -347,7 +360,7 @@ def _calibration_data(tire_file: str | None, pressure_kpa: float, slip: str) -> 
     for speed in CALIBRATION_SPEEDS_KMH:
         for direction in ("left", "right"):
             sc = lane_change_scenario(speed_kmh=speed, pressure_kpa=pressure_kpa, direction=direction,
-                                      tire_file=tire_file)  # fmt: skip
+                                      tire_file=tire_file, vehicle=vehicle)  # fmt: skip
             result = simulate(sc)
             cols = result.columns
             if slip == "detector":
@@ -368,12 +381,13 @@ def _calibration_data(tire_file: str | None, pressure_kpa: float, slip: str) -> 
 
 @functools.lru_cache(maxsize=8)
 def _fit_bank_cached(
-    tire_file: str | None, digest: str, nominal_kpa: float, deflated_kpa: float, slip: str
+    tire_file: str | None, digest: str, nominal_kpa: float, deflated_kpa: float, slip: str, vehicle_json: str
 ) -> TireBank:
+    vehicle = json.loads(vehicle_json) or None
     fits = {}
     tires = {}
     for name, p in (("nominal", nominal_kpa), ("deflated", deflated_kpa)):
-        fz, alpha, force, axle = _calibration_data(tire_file, p, slip)
+        fz, alpha, force, axle = _calibration_data(tire_file, p, slip, vehicle)
         if slip == "tyre":  # the paper's bank: one tyre on all four wheels
             tires[name], fits[name] = fit_arctan_tire(fz, alpha, force)
         else:  # per-axle effective characteristics: each axle's compliance steer is its own
@@ -391,11 +405,13 @@ def fit_bank(
     nominal_kpa: float = NOMINAL_KPA,
     deflated_kpa: float = DEFLATED_KPA,
     slip: str = "detector",
+    vehicle: dict | None = None,
 ) -> TireBank:
     """The bank's nominal and deflated arctan tyres fitted to `tire_file` (default the SUV's .tir)
     from simulator runs (module docstring), against the slip angles `slip` names
-    (:data:`CALIBRATION_SLIP`). ~3 s; cached in memory by the file's content and the simulator's
-    code."""
+    (:data:`CALIBRATION_SLIP`), on the SUV with the scenario `vehicle` overrides (the car the
+    detector will watch). ~3 s; cached in memory by the file's content, the overrides and the
+    simulator's code."""
     if slip not in CALIBRATION_SLIP:
         raise InputError(f"slip must be one of {CALIBRATION_SLIP}, got {slip!r}")
     from suvtwin.pipeline.campaign.cache import model_fingerprint
@@ -410,7 +426,8 @@ def fit_bank(
             raise InputError(f"tire_file {str(path)!r} does not exist")
         sha.update(path.read_bytes())
     return _fit_bank_cached(None if tire_file is None else str(tire_file), sha.hexdigest(),
-                            float(nominal_kpa), float(deflated_kpa), slip)  # fmt: skip
+                            float(nominal_kpa), float(deflated_kpa), slip,
+                            json.dumps(vehicle or {}, sort_keys=True))  # fmt: skip
 
 
 # ------------------------------------------------------------------------ detection of one run
@@ -480,7 +497,8 @@ def detect_run_file(
         scenario = parse_scenario(meta["scenario"], source=f"scenario of {Path(run).name}")
     run_tire = scenario.tire_file if scenario is not None else None
     bank = fit_bank(tire_file if tire_file is not None else run_tire,
-                    nominal_kpa=nominal_kpa, deflated_kpa=deflated_kpa)  # fmt: skip
+                    nominal_kpa=nominal_kpa, deflated_kpa=deflated_kpa,
+                    vehicle=scenario.vehicle if scenario is not None else None)  # fmt: skip
     vehicle = two_track_vehicle(scenario)
     det = detect_run(table, vehicle, bank, accel=accel, noise=noise, seed=seed, true_sideslip=true_sideslip)
     metadata = {
@@ -563,20 +581,20 @@ def study_draw(i: int) -> dict:
             "load_position_m": [round(p, 3) for p in position]}  # fmt: skip
 
 
-def study_scenario(draw: dict, case: str) -> Scenario:
-    """The lane change of a :func:`study_draw` with the tyre of `case`."""
+def study_scenario(draw: dict, case: str, vehicle: dict | None = None) -> Scenario:
+    """The lane change of a :func:`study_draw` with the tyre of `case` (and `vehicle` overrides)."""
     p = {c: (draw["pressure_kpa"] if c == draw["tyre"] else NOMINAL_KPA) for c in CORNERS}
     return lane_change_scenario(speed_kmh=draw["speed_kmh"], pressure_kpa=p, direction=draw["direction"],
                                 load_kg=draw["load_kg"], load_position_m=tuple(draw["load_position_m"]),
-                                tire_file=case_tire_file(case), seed=draw["i"])  # fmt: skip
+                                tire_file=case_tire_file(case), seed=draw["i"], vehicle=vehicle)  # fmt: skip
 
 
 def _detect_study_run(item: tuple) -> dict:
-    path, draw, case, bank, keep_series = item
+    path, draw, case, bank, keep_series, overrides = item
     from suvtwin.pipeline.simulator import read_run
 
     table, _ = read_run(path)
-    vehicle = two_track_vehicle(study_scenario(draw, case))
+    vehicle = two_track_vehicle(study_scenario(draw, case, overrides))
     row = {"draw": draw, "peak_ay_mps2": float(np.abs(table["lat_accel_mps2"]).max()),
            "peak_roll_deg": float(np.degrees(np.abs(table["roll_rad"]).max()))}  # fmt: skip
     for name, (accel, beta) in VARIANTS.items():
@@ -626,6 +644,7 @@ def monte_carlo_study(
     jobs: int = 1,
     cases: tuple[str, ...] = CASES,
     slip: str = "detector",
+    vehicle: dict | None = None,
 ) -> dict:
     """The detector over `n_runs` ISO 3888-1 lane changes per tyre case (:func:`study_draw`).
 
@@ -633,7 +652,8 @@ def monte_carlo_study(
     :func:`suvtwin.pipeline.monitor_scenarios.simulate_cached`. Returns per case the fitted bank,
     the simulation cost, peak a_y and roll, per variant :func:`score_rows`, and an example run
     (the first with the front-left tyre deflated: its selected model over time per variant).
-    `slip`: how the bank is fitted (:data:`CALIBRATION_SLIP`, :func:`fit_bank`).
+    `slip`: how the bank is fitted (:data:`CALIBRATION_SLIP`, :func:`fit_bank`); `vehicle`: scenario
+    vehicle overrides for every run and the bank's calibration (e.g. :data:`RIGID_STEERING`).
     """
     import multiprocessing
     import os
@@ -646,14 +666,16 @@ def monte_carlo_study(
     out = {"runs_per_case": n_runs, "cases": {}}
     for case in cases:
         started = time.perf_counter()
-        bank = fit_bank(case_tire_file(case), slip=slip)
+        bank = fit_bank(case_tire_file(case), slip=slip, vehicle=vehicle)
         fit_s = time.perf_counter() - started
         draws = [study_draw(i) for i in range(n_runs)]
-        runs = [BenchRun(name=f"{case}-{d['i']}", set="lateral_detection", scenario=study_scenario(d, case))
-                for d in draws]  # fmt: skip
+        runs = [BenchRun(name=f"{case}-{d['i']}", set="lateral_detection",
+                         scenario=study_scenario(d, case, vehicle)) for d in draws]  # fmt: skip
         paths, cost = simulate_cached(runs, Path(runs_dir) / case, jobs=jobs)
         items = [
-            (str(p), d, case, bank, d["i"] == 0) for p, d in zip(paths, draws, strict=True) if p is not None
+            (str(p), d, case, bank, d["i"] == 0, vehicle)
+            for p, d in zip(paths, draws, strict=True)
+            if p is not None
         ]
         started = time.perf_counter()
         if jobs > 1 and len(items) > 1:

@@ -246,3 +246,22 @@ def test_a_per_axle_bank_puts_each_axles_tyre_on_its_wheels():
         np.testing.assert_array_equal(bank[number - 1], [[t.k1, t.k2, t.k3] for t in tyres])
     with pytest.raises(InputError, match="front, rear"):
         bank_tires(nominal=(front_nom,), deflated=front_def)
+
+
+def test_given_wheel_loads_replace_eq7():
+    t = np.arange(0.0, 6.0, DT)
+    steer = _lane_change(t)
+    sim = simulate_two_track(steer, SPEED, bank_tires(8), CAR, dt=DT)
+    kwargs = dict(dt=DT, instant_weight=0.0, integral_weight=1.0, forgetting_rate=0.0)
+    plain = detect_deflation(steer, SPEED, sim.lateral_acceleration, sim.yaw_rate, CAR, **kwargs)
+    eq7 = wheel_loads(sim.lateral_acceleration, CAR)  # the loads eq. 7 gives: the same detection
+    given = detect_deflation(steer, SPEED, sim.lateral_acceleration, sim.yaw_rate, CAR,
+                             wheel_load=eq7, **kwargs)  # fmt: skip
+    np.testing.assert_array_equal(given.selected, plain.selected)
+    np.testing.assert_allclose(given.cost, plain.cost, rtol=1e-12)
+    heavier = detect_deflation(steer, SPEED, sim.lateral_acceleration, sim.yaw_rate, CAR,
+                               wheel_load=eq7 * 1.1, **kwargs)  # fmt: skip
+    assert not np.allclose(heavier.cost, plain.cost)  # the loads do enter
+    with pytest.raises(InputError, match="wheel_load"):
+        detect_deflation(steer, SPEED, sim.lateral_acceleration, sim.yaw_rate, CAR,
+                         wheel_load=np.ones(3), **kwargs)  # fmt: skip

@@ -298,3 +298,24 @@ def test_fitted_axle_characteristics_fold_in_the_compliance_steer():
     assert stiffness(effective.nominal[0], loads[0]) == pytest.approx(predicted_front, rel=0.08)
     assert stiffness(effective.nominal[1], loads[2]) == pytest.approx(predicted_rear, rel=0.05)
     assert stiffness(effective.nominal[0], loads[0]) < 0.85 * front
+
+
+def test_without_compliance_the_effective_axle_is_the_tyre():
+    # With the wheels steering exactly as commanded (RIGID_STEERING), the per-axle characteristic
+    # fitted from the steering command must be the tyre's own: C_eff = C/(1 + C·0).
+    from suvtwin.estimators.lateral_detection import wheel_loads
+    from suvtwin.pipeline.lateral_detection import RIGID_STEERING, fit_bank
+
+    loads = wheel_loads(0.0, two_track_vehicle())
+    own = fit_bank(slip="tyre", vehicle=RIGID_STEERING)
+    effective = fit_bank(slip="detector", vehicle=RIGID_STEERING)
+    sc = lane_change_scenario(speed_kmh=90.0, vehicle=RIGID_STEERING)
+    assert sc.vehicle == RIGID_STEERING
+
+    def stiffness(tire, fz):
+        return (tire.k1 - fz / tire.k2) * fz * tire.k3
+
+    for axle, wheel in ((0, 0), (1, 2)):
+        assert stiffness(effective.nominal[axle], loads[wheel]) == pytest.approx(
+            stiffness(own.nominal, loads[wheel]), rel=0.08
+        )
