@@ -309,6 +309,16 @@ def _json_ready(obj):
     return obj
 
 
+def _write_study(path: Path, study: dict | None) -> None:
+    """Write a study's results as JSON (atomically), or remove the file of an earlier configuration
+    when this one asked for none."""
+    if study is None:
+        path.unlink(missing_ok=True)
+        return
+    text = json.dumps(study, indent=1)
+    atomic_write(path, lambda tmp: Path(tmp).write_text(text))
+
+
 def _input_estimation_study(config: CampaignConfig, out: Path) -> dict | None:
     """Paper 001's input-estimation study on the SUV (:func:`suvtwin.pipeline.input_estimation.
     input_estimation_study`, scenario and noise seed ``config.seed``), written to
@@ -490,29 +500,18 @@ def _run_locked(config: CampaignConfig, out: Path, jobs: int, progress: bool,
     monitor = _monitor_study(config, out, jobs)
     if monitor is not None:
         monitor = _json_ready(monitor)
-        text = json.dumps(monitor, indent=1)
-        atomic_write(out / "monitor.json", lambda tmp: Path(tmp).write_text(text))
-    else:
-        (out / "monitor.json").unlink(missing_ok=True)
+    _write_study(out / "monitor.json", monitor)
     timings["monitor_s"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     input_estimation = _input_estimation_study(config, out)
     timings["input_estimation_s"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     road_estimation, timings["road_estimation_made"] = _road_estimation_study(config, out)
-    if road_estimation is not None:
-        text = json.dumps(road_estimation, indent=1)
-        atomic_write(out / "road_estimation.json", lambda tmp: Path(tmp).write_text(text))
-    else:
-        (out / "road_estimation.json").unlink(missing_ok=True)
+    _write_study(out / "road_estimation.json", road_estimation)
     timings["road_estimation_s"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     lateral_detection, timings["lateral_detection_made"] = _lateral_detection_study(config, out, jobs)
-    if lateral_detection is not None:
-        text = json.dumps(lateral_detection, indent=1)
-        atomic_write(out / "lateral_detection.json", lambda tmp: Path(tmp).write_text(text))
-    else:
-        (out / "lateral_detection.json").unlink(missing_ok=True)
+    _write_study(out / "lateral_detection.json", lateral_detection)
     timings["lateral_detection_s"] = time.perf_counter() - t0
     summary = {
         "config": config.model_dump(mode="json"),
