@@ -167,6 +167,7 @@ def estimate_run(
         tire_file=tire_file,
         speed_series_mps=frame["speed_mps"].to_numpy(dtype=float)[None, :],
         static_travel_m=corner_static_travel(corner, run_loads(meta), vehicle=vehicle),
+        vehicle=meta.get("scenario", {}).get("vehicle") or None,
     )
     batch = entry.run(signals)
     metadata = {

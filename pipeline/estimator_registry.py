@@ -68,7 +68,9 @@ class CornerSignals:
     `speed_series_mps`: the speed at every sample, m/s, shape (B, T), for estimators that use the
     speed as it is at each time (causal ones), None where only the mean is known;
     `static_travel_m`: the corner's static suspension compression under the runs' extra load, m
-    (for estimators that linearize the suspension at the travel they measure).
+    (for estimators that linearize the suspension at the travel they measure); `vehicle`: the
+    scenario's vehicle overrides the runs were made with (their corner model's spring, damper,
+    anti-roll bar), None for the SUV's parameter file.
     """
 
     acc_sprung: np.ndarray
@@ -84,6 +86,7 @@ class CornerSignals:
     tire_file: str | Path | None = None
     speed_series_mps: np.ndarray | None = None
     static_travel_m: float = 0.0
+    vehicle: dict | None = None
 
 
 @dataclass(frozen=True)
@@ -176,6 +179,13 @@ def _run_mode_bank(
     )
 
 
+def _vehicle(signals: CornerSignals):
+    """The vehicle parameters of the runs (:func:`suvtwin.mjcf.vehicle.load_vehicle` with their overrides)."""
+    from suvtwin.mjcf.vehicle import load_vehicle
+
+    return load_vehicle(overrides=signals.vehicle or None)
+
+
 def _run_joint(signals: CornerSignals) -> BatchEstimate:
     """The road-level-free joint estimator on the corner's linear roll-plane model
     (:func:`suvtwin.pipeline.estimation.linear_corner_model`)."""
@@ -183,7 +193,8 @@ def _run_joint(signals: CornerSignals) -> BatchEstimate:
     from suvtwin.pipeline.estimation import linear_corner_model
     from suvtwin.tire_stiffness import tire_stiffness_of
 
-    qc = linear_corner_model(signals.corner, signals.sprung_mass, tire_file=signals.tire_file)
+    qc = linear_corner_model(signals.corner, signals.sprung_mass, tire_file=signals.tire_file,
+                             vehicle=_vehicle(signals))  # fmt: skip
     est = estimate_joint(
         signals.acc_sprung, signals.acc_unsprung, signals.dt, qc=qc, speed_mps=signals.speed_mps,
         tire=tire_stiffness_of(signals.tire_file),
@@ -216,7 +227,7 @@ def _run_online(signals: CornerSignals) -> BatchEstimate:
     )
 
     qc = linear_corner_model(signals.corner, signals.sprung_mass, tire_file=signals.tire_file,
-                             static_travel=signals.static_travel_m)  # fmt: skip
+                             static_travel=signals.static_travel_m, vehicle=_vehicle(signals))  # fmt: skip
     tire = tire_stiffness_of(signals.tire_file)
     n_runs, n_steps = signals.acc_sprung.shape
     t = np.arange(n_steps) * signals.dt

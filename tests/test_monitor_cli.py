@@ -104,3 +104,19 @@ def test_monitor_models_the_run_s_own_vehicle(tmp_path, monkeypatch):
     assert fl.spring_rate == 36000.0
     # paper 000 eq. 2 with the overridden chassis mass: m·a2/(2L), independent of the parameter file
     assert fl.sprung_mass == pytest.approx(1700.0 * default.chassis.a2 / (2.0 * default.wheelbase), rel=1e-9)
+
+    # `suvtwin estimate` (joint and online) builds the same run's car
+    import suvtwin.pipeline.estimation as estimation
+
+    built = []
+    original_model = estimation.linear_corner_model
+
+    def spy_model(*args, **kwargs):
+        built.append(original_model(*args, **kwargs))
+        return built[-1]
+
+    monkeypatch.setattr(estimation, "linear_corner_model", spy_model)
+    for name in ("joint", "online"):
+        out = tmp_path / f"{name}.parquet"
+        assert main(["estimate", str(path), "--corner", "fl", "--estimator", name, "--out", str(out)]) == 0
+        assert built[-1].anti_roll == 12000.0 and built[-1].spring_rate == 36000.0
