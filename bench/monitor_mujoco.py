@@ -1,6 +1,8 @@
 """The four-corner tyre-pressure monitor (issue 12) on MuJoCo ground truth, one scenario set at a time.
 
-Run: ``python bench/monitor_mujoco.py --set constant --runs 100 [--jobs 2]`` — prints JSON.
+Run: ``python bench/monitor_mujoco.py --set constant --runs 100 [--jobs 2] [--corner-model roll_plane]
+[--preview]`` — prints JSON (``--corner-model``: the monitor's corner model, default the full car;
+``--preview``: rears fused with the front→rear preview, off by default as in ``suvtwin monitor``).
 Sets (:mod:`suvtwin.pipeline.monitor_scenarios`): ``constant``, ``slow_leak``, ``drop``,
 ``low_speed``, ``warning``, ``nominal_long``; every road level drawn anywhere in its class
 band, seeds from 900000 on (none a test uses). Default 4 runs per set (the issue asks for
@@ -27,6 +29,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -122,6 +125,9 @@ def main(argv: list[str] | None = None) -> dict:
         help="driver reset at S s instead of the placard "
         "(meant for nominal_long: the warning set is low from t = 0)",
     )
+    add("--corner-model", default="full_car", choices=("full_car", "roll_plane"),
+        help="how the monitor models each corner (default full_car; roll_plane: the model before)")
+    add("--preview", action="store_true", help="fuse each rear tyre with its track's front→rear preview")
     add("--discard-runs", action="store_true", help="delete run files once monitored")
     add("--simulate-only", action="store_true", help="fill the run cache, run no monitor")
     args = parser.parse_args(argv)
@@ -143,7 +149,7 @@ def main(argv: list[str] | None = None) -> dict:
     monitor_ok = True
     if not args.simulate_only:
         try:
-            from suvtwin.pipeline.monitoring import monitor_run  # noqa: F401
+            from suvtwin.pipeline.monitoring import monitor_run
         except ImportError as error:
             monitor_ok = False
             out["monitor_error"] = f"suvtwin.pipeline.monitoring.monitor_run is not available: {error}"
@@ -164,7 +170,9 @@ def main(argv: list[str] | None = None) -> dict:
             }
         if monitor_ok and not args.simulate_only and part:
             print(f"{label}: monitoring", file=sys.stderr)
-            t, e, cost = monitor_traces(part, paths, jobs=args.jobs, reset_at_s=args.reset_at)
+            monitor = partial(monitor_run, corner_model=args.corner_model, preview=args.preview)
+            t, e, cost = monitor_traces(part, paths, monitor=monitor, jobs=args.jobs,
+                                        reset_at_s=args.reset_at)  # fmt: skip
             ok = [i for i, trace in enumerate(t) if trace is not None]  # the monitor raised on the others
             traces += [t[i] for i in ok]
             extras += [e[i] for i in ok]

@@ -76,6 +76,7 @@ import numpy.typing as npt
 import scipy.signal
 
 from suvtwin.errors import InputError
+from suvtwin.estimators.full_car import FullCar
 from suvtwin.estimators.quarter_car import (
     pressure_from_stiffness,
     pressure_sigma_from_stiffness_sigma,
@@ -88,6 +89,7 @@ from suvtwin.tire_stiffness import TireStiffness, suv_tire_stiffness
 __all__ = [
     "JointEstimate",
     "corner_response",
+    "envelope_power",
     "signal_direction",
     "signal_gain",
     "LinearQuarterCar",
@@ -123,6 +125,15 @@ class LinearQuarterCar:
       ``spring_rate`` by the equivalent rate at the travel it measures
       (:func:`suvtwin.suspension_law.equivalent_spring_rate`; the online monitor does); None: the
       spring is linear.
+    - ``full_car`` and ``corner`` (index fl 0, fr 1, rl 2, rr 3): the corner's place in a linear
+      full car (:class:`suvtwin.estimators.full_car.FullCar`). An estimator that has it and knows
+      the speed models the corner's spectrum as the full car's on two tracks, the rear wheels
+      re-running the front wheels' road (the online monitor does; ``roll_mass`` is then unused);
+      the others use the roll-plane model.
+    - ``envelope_half_length`` (m): the tyre reads the road as its cos²-weighted mean over ±this
+      length along the track (enveloping over the contact patch, :func:`envelope_power`); an
+      estimator that knows the speed multiplies the road's PSD by the mean's power gain (the
+      online monitor does). 0: a point contact.
     """
 
     sprung_mass: float
@@ -135,6 +146,9 @@ class LinearQuarterCar:
     damping_range: tuple[float, float] | None = None
     suspension: SuspensionLaw | None = None
     static_travel: float = 0.0
+    full_car: FullCar | None = None
+    corner: int = 0
+    envelope_half_length: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -148,6 +162,20 @@ class JointEstimate:
     pressure_sigma_pa: np.ndarray
     road_level: np.ndarray
     info: dict
+
+
+def envelope_power(n: npt.ArrayLike, half_length: float) -> np.ndarray:
+    r"""Power gain of the tyre's enveloping at spatial frequency `n` (cycles/m), (same shape).
+
+    The tyre reads the road as its mean over ±`half_length` (m) weighted by
+    :math:`\cos^2(\pi s / 2l)`, the effective road height of enveloping tyre models in their
+    simplest form (Schmeitz 2004; Pacejka 2012, §10.2); the weight is a Hann window of length
+    L = 2l, whose transform is :math:`\mathrm{sinc}(nL)/(1 - (nL)^2)` (sinc(x) = sin(πx)/(πx)).
+    Returned squared (a PSD factor); 1 for `half_length` 0."""
+    x = 2.0 * float(half_length) * np.asarray(n, dtype=float)
+    near = np.abs(np.abs(x) - 1.0) < 1e-6  # the removable singularity at nL = 1: the limit 1/2
+    gain = np.where(near, 0.5, np.sinc(x) / np.where(near, 1.0, 1.0 - x**2))
+    return gain**2
 
 
 def corner_response(

@@ -10,10 +10,26 @@ Usual call::
 What it estimates (the model is :mod:`suvtwin.estimators.joint`'s, made causal and recursive):
 each tyre's vertical stiffness k_t and pressure (eq. 3–4 of Brancati & Tufano 2022 [3]_) with σ,
 each corner's road level :math:`G_d(n_0)` and waviness w, and the road's, pooled over the corners.
-Each corner is the linear roll-plane corner model
-(:class:`~suvtwin.estimators.joint.LinearQuarterCar`) driven by an ISO 8608 road; the likelihood
-is Whittle's [1]_, projected on the road-driven direction of the corner's two accelerations (see
-the joint estimator). The corners are estimated independently: tying their level and slope
+Each corner is modelled as its place in a linear full car (:mod:`suvtwin.estimators.full_car`:
+body heave, pitch and roll on four corners with anti-roll bars, two independent ISO 8608 tracks,
+each rear wheel re-running its front wheel's road a wheelbase/speed later) when its
+:class:`~suvtwin.estimators.joint.LinearQuarterCar` carries ``full_car``, else as the roll-plane
+corner model (half a heave and half a roll quarter car). The roll-plane model puts the whole
+roll inertia on one axle with that axle's roll stiffness alone and misses the rear wheels
+re-exciting the body, which biases k_t by speed-dependent amounts (29 kPa low at 120 km/h on the
+full car's expected spectrum, ``bench/monitor_model_bias.py``); on the MuJoCo ``constant`` runs
+(observable tyres, 30 s, point contact, band to 30 Hz) it read +4.0 ± 12.7 kPa, the full car
+−1.1 ± 9.0 kPa (``python bench/monitor_mujoco.py --set constant --runs 100 [--corner-model
+roll_plane]``). The full car's gain depends on the speed only through the front→rear delay, so its
+speed-free parts are tabulated and the delay applied per window
+(:func:`~suvtwin.estimators.full_car.gain_at_delay`). The road's PSD is multiplied by the power
+gain of the tyre's enveloping (the corner model's ``envelope_half_length``,
+:func:`~suvtwin.estimators.joint.envelope_power`): the tyre reads the road as a mean over its
+contact patch, which at low speed cuts the road's power around the wheel hop; left out, it read
+the fronts 5.6 kPa low at 40–55 km/h on those runs and gave false warnings at 36–42 km/h. The
+likelihood is Whittle's [1]_, projected on the road-driven direction of the corner's two
+accelerations (the heave quarter car's; see the joint estimator). The corners are estimated
+independently: tying their level and slope
 together lowers the ideal Cramér–Rao bound a little (``bench/monitor_bound.py``), but on the
 MuJoCo SUV it turned each corner model's small gain error into a k_t error of the other corners
 and made every tyre worse (README, "Online tyre-pressure monitor").
@@ -131,7 +147,8 @@ from scipy.interpolate import CubicSpline
 from scipy.special import ndtr
 
 from suvtwin.errors import InputError
-from suvtwin.estimators.joint import N0, LinearQuarterCar, signal_direction, signal_gain
+from suvtwin.estimators.full_car import gain_at_delay, projected_terms, wheel_responses
+from suvtwin.estimators.joint import N0, LinearQuarterCar, envelope_power, signal_direction, signal_gain
 from suvtwin.estimators.preview import PreviewConfig, PreviewTrack, fuse_track
 from suvtwin.estimators.quarter_car import stiffness_from_pressure
 from suvtwin.jit import cached_njit
@@ -197,7 +214,12 @@ class MonitorConfig:
     band_cycles_per_m : (float, float)
         Spatial-frequency band used, cycles/m (times the speed: Hz).
     max_frequency_hz : float
-        Upper limit of the band, Hz.
+        Upper limit of the band, Hz. 20 Hz: above it the MuJoCo SUV's wheel acceleration exceeds
+        the linear full car's by 7–17 % (20–25 Hz, twice the wheel hop; 3–7 % below 20 Hz) on
+        a smooth road, about half of it the asymmetric damper's even part, which no linear model
+        holds (a symmetric damper takes the 20–25 Hz excess to 5 %); read as road-driven power it
+        makes the tyre look stiff. On the 100 ``constant`` runs the observable tyres' error at
+        30 s was +4.5 ± 9.0 kPa with 30 Hz, +1.9 ± 9.6 kPa with 20 Hz.
     merge_above_hz, merge_width_hz : float
         Above `merge_above_hz` the periodogram's neighbouring frequencies are averaged in bands
         about `merge_width_hz` wide (Whittle's likelihood of a band-averaged periodogram, each band
@@ -260,7 +282,7 @@ class MonitorConfig:
     preview_memory_s: float = 32.0
     preview_gate: float = 3.0
     band_cycles_per_m: tuple[float, float] = (0.05, 1.5)
-    max_frequency_hz: float = 30.0
+    max_frequency_hz: float = 20.0
     merge_above_hz: float = 3.0
     merge_width_hz: float = 0.5
     sigma_accel: float = 0.5
@@ -604,6 +626,14 @@ class TyreMonitor:
         self._u11 = np.empty((n_c, n_d, 1, self.freq.size))
         self._u22 = np.empty_like(self._u11)
         self._u12 = np.empty(self._u11.shape, dtype=complex)
+        # corners placed in a full car: the gain's speed-free parts on the fine frequencies
+        self._car_a = self._car_b = None
+        self._per_window_gain = any(
+            qc.full_car is not None or qc.envelope_half_length > 0 for qc in self.models
+        )
+        if any(qc.full_car is not None for qc in self.models):
+            self._car_a = np.zeros((n_c, n_d, self._p_coarse.size, fine.size))
+            self._car_b = np.zeros(self._car_a.shape, dtype=complex)
         for c in range(n_c):
             self._slot(c, 0)
         self._nonlinear = any(qc.suspension is not None for qc in self.models)
@@ -639,8 +669,14 @@ class TyreMonitor:
         kt = contact * stiffness_from_pressure(self._p_coarse * 1e3, **asdict(self.tires[c]))
         for d, cd in enumerate(self.dampings[c]):
             model = replace(qc, damping=float(cd), spring_rate=rate, tire_damping=contact * qc.tire_damping)
-            g = signal_gain(self._fine[None, :], kt[:, None], model) / self.noise
-            self._gain[slot, d] = np.add.reduceat(g, self._group_start, axis=1) / self._group_size
+            if qc.full_car is None:
+                g = signal_gain(self._fine[None, :], kt[:, None], model) / self.noise
+                self._gain[slot, d] = np.add.reduceat(g, self._group_start, axis=1) / self._group_size
+            else:  # the full car: the speed-free parts, the speed added per window (_window_grid)
+                h = wheel_responses(self._fine, qc.full_car, qc.corner, kt / contact, spring_rate=rate,
+                                    damping=float(cd), tire_scale=contact)  # fmt: skip
+                a_sq, cross = projected_terms(h, *signal_direction(self._fine, model))
+                self._car_a[slot, d], self._car_b[slot, d] = a_sq / self.noise, cross / self.noise
             u1, u2 = signal_direction(self.freq, model)
             self._u11[slot, d, 0] = np.abs(u1) ** 2 / self.noise
             self._u22[slot, d, 0] = np.abs(u2) ** 2 / self.noise
@@ -656,10 +692,12 @@ class TyreMonitor:
             idle = np.flatnonzero(self._slot_used[len(self.models):] < self._n_updates) + len(self.models)
             if n < self.config.table_slots or idle.size == 0:
                 slot = n  # grow
-                grow = lambda a: np.concatenate([a, np.empty((1,) + a.shape[1:], a.dtype)])  # noqa: E731
+                grow = lambda a: np.concatenate([a, np.empty((8,) + a.shape[1:], a.dtype)])  # noqa: E731
                 if n >= self._gain.shape[0]:
                     self._gain = grow(self._gain)
                     self._u11, self._u22, self._u12 = grow(self._u11), grow(self._u22), grow(self._u12)
+                    if self._car_a is not None:
+                        self._car_a, self._car_b = grow(self._car_a), grow(self._car_b)
                 self._slot_used = np.append(self._slot_used, self._n_updates)
             else:
                 slot = int(idle[np.argmin(self._slot_used[idle])])
@@ -986,7 +1024,20 @@ class TyreMonitor:
         if inside.size == 0:
             return ll, lam
         slot = np.where(used, table[:, 0], -1).astype(np.int64)
-        _window_loglik(proj, weight, int(inside[0]), int(inside[-1]) + 1, base, self._gain, slot,
+        gain = self._gain
+        if self._per_window_gain:  # the gains at this window's speed, one row per corner
+            gain = self._gain[np.maximum(slot, 0)]
+            for c in np.flatnonzero(used):
+                qc = self.models[c]
+                if qc.full_car is not None:
+                    g = gain_at_delay(self._car_a[slot[c]], self._car_b[slot[c]], self._fine,
+                                      qc.full_car.wheelbase / speed)  # fmt: skip
+                    gain[c] = np.add.reduceat(g, self._group_start, axis=-1) / self._group_size
+                if qc.envelope_half_length > 0.0:  # the tyre's enveloping filters the road it reads
+                    fine = envelope_power(self._fine / speed, qc.envelope_half_length)
+                    gain[c] *= np.add.reduceat(fine, self._group_start) / self._group_size
+            slot = np.where(used, np.arange(n_c), -1).astype(np.int64)
+        _window_loglik(proj, weight, int(inside[0]), int(inside[-1]) + 1, base, gain, slot,
                        *_LEVEL_BOUNDS, ll, lam)  # fmt: skip
         return ll, lam
 

@@ -22,6 +22,7 @@ import pyarrow.parquet as pq
 
 from suvtwin import suspension_law
 from suvtwin.errors import InputError
+from suvtwin.estimators.full_car import FullCar
 from suvtwin.estimators.joint import LinearQuarterCar
 from suvtwin.estimators.quarter_car import sprung_mass_share
 from suvtwin.files import atomic_write, read_parquet_table
@@ -37,6 +38,7 @@ __all__ = [
     "check_time_axis",
     "corner_sprung_mass",
     "estimate_run",
+    "full_car_model",
     "linear_corner_model",
     "run_load_and_tire",
     "score_estimate",
@@ -250,6 +252,7 @@ def linear_corner_model(
     tire_file: str | Path | None = None,
     static_travel: float = 0.0,
     vehicle: VehicleParams | None = None,
+    full_car: FullCar | None = None,
 ) -> LinearQuarterCar:
     """The SUV corner as a linear roll-plane corner model for the joint estimator.
 
@@ -284,6 +287,47 @@ def linear_corner_model(
         ),
         suspension=SuspensionLaw.of(s, spring_rate=float(vehicle.spring_rate[i])),
         static_travel=float(static_travel),
+        full_car=full_car,
+        corner=i,
+        envelope_half_length=float(vehicle.tire.envelope_half_length),
+    )
+
+
+def full_car_model(
+    vehicle: VehicleParams | None = None, loads=(), *, tire_file: str | Path | None = None
+) -> FullCar:
+    """The SUV as a linear full car (:class:`suvtwin.estimators.full_car.FullCar`) with extra `loads`
+    ((kg, (x, y, z) m from the chassis CoG) each, :func:`run_loads`).
+
+    The loads are the simulator's: 0.5 m cubes welded to the chassis (their own inertia m·0.5²/6
+    about each axis); body mass, centre of gravity and pitch and roll inertias are the chassis's
+    and the loads' together (parallel axes), the corners' positions taken from the new centre of
+    gravity. Dampers at the mean of their low-speed compression and rebound slopes; tyres at
+    their nominal stiffness (eq. 3–4 at the reference pressure) and radial damping. `vehicle`:
+    default the SUV's parameter file; `tire_file`: default the vehicle's tyre."""
+    vehicle = vehicle or load_vehicle()
+    c, s = vehicle.chassis, vehicle.suspension
+    masses = np.array([c.mass] + [float(m) for m, _ in loads])
+    pos = np.array([(0.0, 0.0, 0.0)] + [tuple(p) for _, p in loads], dtype=float)
+    total = float(masses.sum())
+    cog = masses @ pos / total
+    rel = pos - cog
+    own = np.array([0.0] + [m * 0.5**2 / 6.0 for m in masses[1:]])
+    pitch = c.inertia_pitch + own.sum() + float(masses @ (rel[:, 0] ** 2 + rel[:, 2] ** 2))
+    roll = c.inertia_roll + own.sum() + float(masses @ (rel[:, 1] ** 2 + rel[:, 2] ** 2))
+    tire = load_tire(tire_file or vehicle.tire_file)
+    damping = 0.5 * (s.damper_compression_low + s.damper_rebound_low)
+    return FullCar(
+        sprung_mass=total,
+        inertia_pitch=pitch,
+        inertia_roll=roll,
+        corner_xy=tuple((float(x - cog[0]), float(y - cog[1])) for x, y in vehicle.corner_xy),
+        unsprung_mass=tuple(float(m) for m in vehicle.unsprung_mass),
+        spring_rate=tuple(float(k) for k in vehicle.spring_rate),
+        damping=(float(damping),) * 4,
+        anti_roll=(float(s.anti_roll_front), float(s.anti_roll_rear)),
+        tire_stiffness=(float(tire.vertical_stiffness_nominal),) * 4,
+        tire_damping=(float(tire.vertical_damping),) * 4,
     )
 
 

@@ -127,9 +127,12 @@ def _last_update(trace: MonitorTrace, at_s: float) -> int | None:
     return k if k >= 0 else None
 
 
-def errors_at(traces: Sequence[MonitorTrace], at_s: float, *, tyre: str | None = None) -> dict:
+def errors_at(
+    traces: Sequence[MonitorTrace], at_s: float, *, tyre: str | None = None, observable_only: bool = False
+) -> dict:
     """Error (estimate − truth, kPa) of the last update at or before `at_s`, over runs × tyres
-    (only `tyre`'s, one of fl, fr, rl, rr, if given):
+    (only `tyre`'s, one of fl, fr, rl, rr, if given; only those flagged observable then if
+    `observable_only`, ``unobservable`` then 0):
     ``mean_kpa``, ``std_kpa`` (population), ``max_abs_kpa``, ``n`` (finite errors), ``n_missing``
     (runs × tyres without a finite estimate by then or shorter runs) and ``unobservable`` (share
     of the n flagged not observable)."""
@@ -143,7 +146,7 @@ def errors_at(traces: Sequence[MonitorTrace], at_s: float, *, tyre: str | None =
             missing += len(cols)
             continue
         e = tr.error[k][cols]
-        ok = np.isfinite(e)
+        ok = np.isfinite(e) & (tr.observable[k][cols] if observable_only else True)
         missing += int(np.sum(~ok))
         errors.append(e[ok])
         flags.append(~tr.observable[k][cols][ok])
@@ -380,6 +383,9 @@ def score_set(
     minutes = sum(t.duration_s for t in traces) / 60.0
     out: dict = {"set": set_name, "runs": len(traces), "simulated_min": minutes}
     out["error_at"] = {f"{at:g}s": errors_at(traces, at) for at in (10.0, 30.0)}
+    out["error_at_observable"] = {
+        f"{at:g}s": errors_at(traces, at, observable_only=True) for at in (10.0, 30.0)
+    }
     out["coverage"] = coverage(traces, k=2.0, after_s=2.0)
     out["error_at_by_tyre"] = {
         c: {f"{at:g}s": errors_at(traces, at, tyre=c) for at in (10.0, 30.0)} for c in CORNERS

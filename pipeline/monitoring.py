@@ -30,6 +30,7 @@ from suvtwin.pipeline.estimation import (
     check_time_axis,
     corner_sprung_mass,
     corner_static_travel,
+    full_car_model,
     linear_corner_model,
     run_load_and_tire,
     run_loads,
@@ -37,7 +38,9 @@ from suvtwin.pipeline.estimation import (
 )
 from suvtwin.tire_stiffness import tire_stiffness_of
 
-__all__ = ["MonitorResult", "corner_models", "monitor_run", "monitor_signals", "write_monitor"]
+__all__ = [
+    "CORNER_MODELS", "MonitorResult", "corner_models", "monitor_run", "monitor_signals", "write_monitor",
+]  # fmt: skip
 
 _METADATA_KEY = b"suvtwin.monitor"
 
@@ -51,15 +54,30 @@ class MonitorResult:
     update: MonitorUpdate
 
 
-def corner_models(corners: tuple[str, ...], *, loads=(), tire_file: str | Path | None = None, vehicle=None):
+CORNER_MODELS = ("full_car", "roll_plane")
+"""How the monitor models each corner's spectrum: ``full_car`` (the corner in the linear full car on two
+tracks, :mod:`suvtwin.estimators.full_car`; default) or ``roll_plane`` (half a heave and half a roll
+quarter car, :class:`suvtwin.estimators.joint.LinearQuarterCar`; the model before, kept to compare)."""
+
+
+def corner_models(
+    corners: tuple[str, ...], *, loads=(), tire_file: str | Path | None = None, vehicle=None,
+    corner_model: str = "full_car",
+):  # fmt: skip
     """The SUV's linear corner models of `corners` with extra `loads` on the chassis ((kg, (x, y, z) m)
     each, :func:`suvtwin.pipeline.estimation.run_loads`): their total mass shared as in paper 000
-    eq. 2, and each corner's static travel under them. `vehicle`: default the SUV's parameter
-    file (:func:`suvtwin.pipeline.estimation.run_vehicle` gives a run's)."""
+    eq. 2, and each corner's static travel under them; each placed in the car as a linear full car
+    (:func:`suvtwin.pipeline.estimation.full_car_model`, loads included). `vehicle`: default the
+    SUV's parameter file (:func:`suvtwin.pipeline.estimation.run_vehicle` gives a run's).
+    `corner_model`: one of :data:`CORNER_MODELS` (``roll_plane``: not placed in the full car)."""
+    if corner_model not in CORNER_MODELS:
+        raise InputError(f"corner model must be one of {', '.join(CORNER_MODELS)}, got {corner_model!r}")
     load_kg = float(sum(m for m, _ in loads))
+    car = full_car_model(vehicle, loads, tire_file=tire_file) if corner_model == "full_car" else None
     return [
         linear_corner_model(c, corner_sprung_mass(c, load_kg, vehicle=vehicle), tire_file=tire_file,
-                            static_travel=corner_static_travel(c, loads, vehicle=vehicle), vehicle=vehicle)
+                            static_travel=corner_static_travel(c, loads, vehicle=vehicle), vehicle=vehicle,
+                            full_car=car)
         for c in corners
     ]  # fmt: skip
 
@@ -77,13 +95,14 @@ def monitor_signals(
     chunk_s: float = 10.0,
     preview: bool = False,
     vehicle=None,
+    corner_model: str = "full_car",
 ) -> tuple[TyreMonitor, MonitorUpdate]:
     """Stream arrays through a new monitor in chunks of `chunk_s` s; the monitor and all its rows.
 
     `acc_sprung`, `acc_unsprung`: (T, C) in the order of `corners`; `loads`: the extra loads on the
     chassis, (kg, (x, y, z) m from the CoG) each (:func:`corner_models`); `preview`: fuse each rear
     tyre with the front→rear preview of its track (when both its corners are monitored); `vehicle`:
-    the car's parameters (default the SUV's parameter file)."""
+    the car's parameters (default the SUV's parameter file); `corner_model`: :data:`CORNER_MODELS`."""
     vehicle = vehicle or load_vehicle()
     t = np.asarray(t_s, dtype=float)
     if t.size < 2:
@@ -94,7 +113,8 @@ def monitor_signals(
     tracks = [(corners.index(f), corners.index(r)) for f, r in (("fl", "rl"), ("fr", "rr"))
               if f in corners and r in corners]  # fmt: skip
     monitor = TyreMonitor(
-        corner_models(corners, loads=loads, tire_file=tire_file, vehicle=vehicle), dt=dt, config=config,
+        corner_models(corners, loads=loads, tire_file=tire_file, vehicle=vehicle, corner_model=corner_model),
+        dt=dt, config=config,
         tire=[tire_stiffness_of(tire_file)] * len(corners), names=corners,
         tracks=tracks if preview else (), wheelbase_m=vehicle.wheelbase,
     )  # fmt: skip
@@ -118,6 +138,7 @@ def monitor_run(
     rule: DeflationRule | None = None,
     chunk_s: float = 10.0,
     preview: bool = False,
+    corner_model: str = "full_car",
 ) -> MonitorResult:
     """Run the monitor and the deflation warning on a run file.
 
@@ -129,7 +150,8 @@ def monitor_run(
     (latched), ``{c}_spring_rate_npm`` and ``{c}_tyre_contact`` (the suspension rate and tyre contact
     share the window was analysed with: :class:`~suvtwin.estimators.monitor.MonitorUpdate`), and the
     shared ``road_level_hat_m3`` and ``waviness_hat``. `preview`: fuse each rear tyre with the
-    front→rear preview of its track (:func:`monitor_signals`).
+    front→rear preview of its track (:func:`monitor_signals`). `corner_model`: how each corner's
+    spectrum is modelled, :data:`CORNER_MODELS`.
     """
     unknown = [c for c in corners if c not in CORNERS]
     if unknown or not corners:
@@ -157,6 +179,7 @@ def monitor_run(
     monitor, update = monitor_signals(
         t, frame["speed_mps"].to_numpy(dtype=float), acc_s, acc_u, corners=corners, loads=loads,
         tire_file=tire_file, config=config, chunk_s=chunk_s, preview=preview, vehicle=run_vehicle(meta),
+        corner_model=corner_model,
     )  # fmt: skip
     rule = rule or DeflationRule()
     warn = deflation_warnings(
@@ -184,6 +207,7 @@ def monitor_run(
         "corners": list(corners),
         "tire_file": tire_file,
         "load_kg": load,
+        "corner_model": corner_model,
         "static_travel_mm": dict(zip(corners, [1e3 * m.static_travel for m in monitor.models], strict=True)),
         "placard_kpa": placard_kpa,
         "reset_at_s": None if placard_kpa is not None else float(t[0] if reset_at_s is None else reset_at_s),

@@ -7,6 +7,7 @@ from suvtwin.estimators.joint import (
     LinearQuarterCar,
     _spectrum,
     corner_response,
+    envelope_power,
     estimate_joint,
     profile_loglik,
     profile_loglik_slope,
@@ -184,3 +185,14 @@ def test_waviness_estimate_removes_the_non_iso_road_bias():
         assert (before > 40.0) if w < 2 else (before < -80.0)
         assert (after < 40.0 and after > -20.0) if w < 2 else abs(after) < 30.0
         assert abs(np.mean(est.info["waviness_hat_at_end"]) - w) < 0.3  # measured 1.63-1.83, 2.68-2.84
+
+
+def test_envelope_power_is_the_cos2_mean_of_a_sinusoid():
+    # independent: the cos²-weighted mean over ±l of a road cos(2πns), by quadrature, squared
+    half = 0.12
+    s = np.linspace(-half, half, 200001)
+    w = np.cos(0.5 * np.pi * s / half) ** 2
+    for n in (0.0, 0.5, 1.5, 1.0 / (2 * half), 6.0, 20.0):
+        mean = np.trapezoid(w * np.cos(2 * np.pi * n * s), s) / np.trapezoid(w, s)
+        assert envelope_power(n, half) == pytest.approx(mean**2, rel=1e-6, abs=1e-12)
+    assert envelope_power(3.0, 0.0) == 1.0

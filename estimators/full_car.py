@@ -1,0 +1,209 @@
+r"""Linear full car (seven degrees of freedom) on two road tracks: each corner's acceleration spectrum.
+
+Usual call::
+
+    car = full_car_model(load_vehicle())          # suvtwin.pipeline.estimation, or FullCar(...)
+    S = corner_spectrum(f, speed, car, corner=2, kt=kt)   # (F, 2, 2) per unit road-velocity PSD
+
+Model (the textbook full-car ride model, e.g. Jazar [1]_ ch. 15; Gillespie [2]_ ch. 5): a rigid
+body of mass m with pitch and roll inertias about its centre of gravity rests on four vertical
+spring–damper corners at (x_i, y_i) from it (x forward, y left); an anti-roll bar joins the two
+wheels of each axle (force :math:`k_{arb}(s_l - s_r)` on each, s the compression); four unsprung
+masses stand on radial tyres (stiffness k_t, damping c_t) on the road. Small motions about the
+static position: heave z, pitch θ, roll φ and the four wheel heights :math:`z_{u,i}`; the body
+point above corner i is at :math:`z_{b,i} = z + x_i\theta + y_i\varphi`. The equations
+:math:`M\ddot q + C\dot q + Kq = K_t r + C_t\dot r` follow from the energies
+
+.. math:: V = \tfrac12\sum_i k_i s_i^2 + \tfrac12 k_{f}(s_{fl} - s_{fr})^2
+   + \tfrac12 k_{r}(s_{rl} - s_{rr})^2 + \tfrac12\sum_i k_{t,i}(z_{u,i} - r_i)^2,
+   \qquad s_i = z_{u,i} - z_{b,i},
+
+and the like dissipation function (dampers c_i, tyre damping c_{t,i}).
+
+Roads: the left track runs under fl and rl, the right under fr and rr; each rear wheel meets its
+front wheel's road a wheelbase later, :math:`\tau = L/v`; the two tracks are independent with the
+same road-velocity PSD S_v (ISO 8608 roads of waviness 2 have white road velocity). Corner i's
+2×2 spectrum of (body acceleration above it, wheel acceleration) is then
+
+.. math:: S(f) = S_v\sum_{\text{tracks}} g\,g^H,\qquad
+   g = h_{\text{front}} + h_{\text{rear}}\,e^{-i2\pi f\tau},
+
+h the corner's response to unit road velocity under one wheel. Projected on a fixed direction u,
+:math:`|u^H g|^2 = |a|^2 + |b|^2 + 2\,\mathrm{Re}(a\bar b\,e^{i2\pi f\tau})` with
+:math:`a = u^H h_{\text{front}}`, :math:`b = u^H h_{\text{rear}}`: the speed enters only through
+that phase, so :func:`projected_terms` returns the speed-free parts and :func:`gain_at_delay` adds
+the speed.
+
+Why this model: the roll-plane corner model of :class:`suvtwin.estimators.joint.LinearQuarterCar`
+(half a heave quarter car plus half a roll quarter car with the whole roll inertia on one axle)
+misses that the body's roll is carried by both axles' springs and bars, and that the rear wheels
+re-excite the body the front wheels excited; on the SUV it biases the fitted tyre stiffness by
+speed-dependent amounts of up to 30 kPa (``python bench/monitor_model_bias.py``).
+
+No MuJoCo here: plain arrays.
+
+References
+----------
+.. [1] R. N. Jazar, *Vehicle Dynamics: Theory and Application*, 3rd ed., Springer, 2017, ch. 15
+   (full-car vibrating model).
+.. [2] T. D. Gillespie, *Fundamentals of Vehicle Dynamics*, SAE, 1992, ch. 5 (ride).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from suvtwin.errors import InputError
+
+__all__ = ["TRACKS", "FullCar", "corner_spectrum", "gain_at_delay", "projected_terms", "wheel_responses"]
+
+TRACKS = ((0, 2), (1, 3))
+"""(front, rear) wheel indices of the left and the right track, corners ordered fl, fr, rl, rr."""
+
+
+@dataclass(frozen=True)
+class FullCar:
+    """Linear full car: body and corners, SI units; corners ordered fl, fr, rl, rr.
+
+    ``sprung_mass`` (kg), ``inertia_pitch`` and ``inertia_roll`` (kg m², about the body's centre of
+    gravity), ``corner_xy`` (4 × (x, y), m from it, x forward, y left), ``unsprung_mass`` (kg),
+    ``spring_rate`` (N/m at the wheel), ``damping`` (N s/m, linear equivalent), ``anti_roll``
+    ((front, rear) wheel-rate equivalents of the bars, N/m), ``tire_stiffness`` (N/m) and
+    ``tire_damping`` (N s/m) per corner. ``wheelbase`` (m) is the front-to-rear distance."""
+
+    sprung_mass: float
+    inertia_pitch: float
+    inertia_roll: float
+    corner_xy: tuple[tuple[float, float], ...]
+    unsprung_mass: tuple[float, ...]
+    spring_rate: tuple[float, ...]
+    damping: tuple[float, ...]
+    anti_roll: tuple[float, float]
+    tire_stiffness: tuple[float, ...]
+    tire_damping: tuple[float, ...]
+
+    def __post_init__(self) -> None:
+        per_corner = ("corner_xy", "unsprung_mass", "spring_rate", "damping", "tire_stiffness",
+                      "tire_damping")  # fmt: skip
+        for name in per_corner:
+            if len(getattr(self, name)) != 4:
+                raise InputError(f"full car {name} needs one entry per corner (fl, fr, rl, rr)")
+        positive = [self.sprung_mass, self.inertia_pitch, self.inertia_roll, *self.unsprung_mass,
+                    *self.spring_rate, *self.tire_stiffness]  # fmt: skip
+        if not all(np.isfinite(positive)) or min(positive) <= 0:
+            raise InputError("full car masses, inertias, spring rates and tyre stiffnesses must be > 0")
+
+    @property
+    def wheelbase(self) -> float:
+        """Front to rear axle, m (mean over the two tracks)."""
+        xy = np.asarray(self.corner_xy)
+        return float(0.5 * ((xy[0, 0] - xy[2, 0]) + (xy[1, 0] - xy[3, 0])))
+
+
+def wheel_responses(
+    f: npt.ArrayLike,
+    car: FullCar,
+    corner: int,
+    kt: npt.ArrayLike,
+    *,
+    spring_rate: float | None = None,
+    damping: float | None = None,
+    tire_scale: float = 1.0,
+) -> np.ndarray:
+    """Corner `corner`'s (body, wheel) acceleration per unit road velocity under each wheel.
+
+    `f` (F,) Hz; `kt` (P,) N/m: the corner's own tyre stiffness (the other tyres keep the car's);
+    `spring_rate`, `damping`: the corner's own (default the car's); `tire_scale`: its tyre's
+    stiffness and damping are multiplied by it (the share of time in contact). Returns complex
+    (P, F, 2, 4): [p, f, 0 body / 1 wheel, road wheel fl, fr, rl, rr], (m/s²)/(m/s)."""
+    f = np.atleast_1d(np.asarray(f, dtype=float))
+    kt = np.atleast_1d(np.asarray(kt, dtype=float))
+    xy = np.asarray(car.corner_xy, dtype=float)
+    jac = np.c_[np.ones(4), xy[:, 0], xy[:, 1]]  # body point above each corner: z + x θ + y φ
+    sel = np.zeros((4, 7))  # compression s = z_u − z_b
+    sel[:, :3] = -jac
+    sel[np.arange(4), 3 + np.arange(4)] = 1.0
+    ks = np.array(car.spring_rate, dtype=float)
+    cs = np.array(car.damping, dtype=float)
+    if spring_rate is not None:
+        ks[corner] = spring_rate
+    if damping is not None:
+        cs[corner] = damping
+    k_corner = np.diag(ks)
+    for (left, right), k_bar in zip(((0, 1), (2, 3)), car.anti_roll, strict=True):
+        k_corner[np.ix_((left, right), (left, right))] += k_bar * np.array([[1.0, -1.0], [-1.0, 1.0]])
+    kt_all = np.array(car.tire_stiffness, dtype=float)
+    ct_all = np.array(car.tire_damping, dtype=float)
+    stiff = sel.T @ k_corner @ sel
+    damp = sel.T @ np.diag(cs) @ sel
+    mass = np.diag([car.sprung_mass, car.inertia_pitch, car.inertia_roll, *car.unsprung_mass])
+    s = 2j * np.pi * f  # (F,)
+    n_p, n_f = kt.size, f.size
+    # dynamic stiffness (F, 7, 7) with the corner's tyre at the car's, inverted once per frequency;
+    # each k_t on the grid is a rank-one change of it (Sherman–Morrison), so the grid costs no solves
+    kt_ref = tire_scale * float(car.tire_stiffness[corner])
+    ct = ct_all.copy()
+    ct[corner] *= tire_scale
+    road_ref = np.array(kt_all, dtype=complex)[None, :] + s[:, None] * ct[None, :]  # (F, 4) per elevation
+    road_ref[:, corner] += kt_ref - kt_all[corner]
+    dyn = stiff[None] + s[:, None, None] * damp[None] + (s**2)[:, None, None] * mass[None]  # (F, 7, 7)
+    idx = 3 + np.arange(4)
+    dyn[:, idx, idx] += road_ref
+    inv = np.linalg.inv(dyn)
+    out_rows = np.zeros((2, 7))
+    out_rows[0, :3] = jac[corner]
+    out_rows[1, 3 + corner] = 1.0
+    rows = np.einsum("ij,fjk->fik", out_rows, inv)  # (F, 2, 7): outputs per unit force on each DOF
+    j = 3 + corner
+    delta = tire_scale * kt[:, None] - kt_ref  # (P, 1): the grid's change of the corner's tyre rate
+    denom = 1.0 + delta * inv[None, :, j, j]  # (P, F)
+    # C D⁻¹ e_w for the wheels' DOFs w:
+    # rows[:, :, 3 + w] − δ rows[:, :, j] D0⁻¹[j, 3 + w] / (1 + δ D0⁻¹[j, j])
+    corr = rows[None, :, :, j, None] * inv[None, :, None, j, 3:] * (delta / denom)[:, :, None, None]
+    per_force = rows[None, :, :, 3:] - corr  # (P, F, 2, 4)
+    road = np.broadcast_to(road_ref, (n_p, n_f, 4)).copy()
+    road[:, :, corner] += (delta * np.ones(n_f)[None, :])  # the grid's own tyre rate
+    out = per_force * road[:, :, None, :]  # displacement per unit road elevation under each wheel
+    return out * s[None, :, None, None]  # acceleration s² X per road velocity s R
+
+
+def projected_terms(h: np.ndarray, u1: np.ndarray, u2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Speed-free parts of the projected gain over both tracks: A = Σ (|a|² + |b|²) and B = Σ a b̄.
+
+    `h` (..., F, 2, 4) from :func:`wheel_responses`; (u1, u2) (F,) the unit direction projected on.
+    Returns A (..., F) real and B (..., F) complex."""
+    proj = np.conj(u1)[:, None] * h[..., 0, :] + np.conj(u2)[:, None] * h[..., 1, :]  # (..., F, 4)
+    a_sq = np.zeros(proj.shape[:-1])
+    cross = np.zeros(proj.shape[:-1], dtype=complex)
+    for front, rear in TRACKS:
+        a, b = proj[..., front], proj[..., rear]
+        a_sq += np.abs(a) ** 2 + np.abs(b) ** 2
+        cross += a * np.conj(b)
+    return a_sq, cross
+
+
+def gain_at_delay(a_sq: np.ndarray, cross: np.ndarray, f: np.ndarray, delay_s: float) -> np.ndarray:
+    r"""Projected gain :math:`\sum|u^H g|^2 = A + 2\,\mathrm{Re}(B e^{i2\pi f\tau})` at front→rear
+    delay τ = wheelbase / speed (s); shapes as :func:`projected_terms`'s."""
+    return a_sq + 2.0 * (cross * np.exp(2j * np.pi * f * delay_s)).real
+
+
+def corner_spectrum(
+    f: npt.ArrayLike, speed_mps: float, car: FullCar, corner: int, kt: float | None = None
+) -> np.ndarray:
+    """Corner `corner`'s 2×2 spectrum of (body, wheel) acceleration per unit road-velocity PSD of each
+    track, (F, 2, 2) complex, at `speed_mps`; `kt` its tyre's stiffness (default the car's)."""
+    if not speed_mps > 0:
+        raise InputError(f"speed must be > 0 m/s, got {speed_mps!r}")
+    f = np.atleast_1d(np.asarray(f, dtype=float))
+    kt = car.tire_stiffness[corner] if kt is None else kt
+    h = wheel_responses(f, car, corner, np.array([kt]))[0]  # (F, 2, 4)
+    lag = np.exp(-2j * np.pi * f * car.wheelbase / speed_mps)[:, None]
+    out = np.zeros((f.size, 2, 2), dtype=complex)
+    for front, rear in TRACKS:
+        g = h[:, :, front] + h[:, :, rear] * lag
+        out += g[:, :, None] * np.conj(g[:, None, :])
+    return out
