@@ -34,6 +34,13 @@ average forces still carry the static load,
 progressive spring and the bump stop push it up. Both expectations have closed forms in the
 normal distribution's partial moments (:func:`partial_moment`), evaluated here over arrays.
 
+**What the linearization leaves.** An asymmetric damper's force has an even part in v
+(:math:`F_d(v) + F_d(-v) \ne 0`), which no linear model holds: it is uncorrelated with v, so the
+statistical linearization drops it, yet it is a force between body and wheel whose spectrum lies
+at sums of the velocity's frequencies (twice the body bounce, twice the wheel hop). Regressed
+on :math:`|v| - E|v|` (:func:`damper_even_slope`), its spectrum is that of a rectified Gaussian
+process (:func:`rectified_psd`); the online monitor adds its response to the corner's spectrum.
+
 Written by hand: no maintained library linearizes a piecewise polynomial spring this way.
 
 References
@@ -55,12 +62,14 @@ from suvtwin.jit import cached_njit
 
 __all__ = [
     "SuspensionLaw",
+    "damper_even_slope",
     "damper_force",
     "equivalent_spring_rate",
     "gaussian_damper_force",
     "gaussian_spring_force",
     "gaussian_spring_rate",
     "partial_moment",
+    "rectified_psd",
     "spring_force",
     "spring_rate",
     "static_travel",
@@ -324,3 +333,65 @@ def equivalent_spring_rate(
     and :math:`k_{eq} = E[F_s'(m + x)]`. Arrays broadcast; compiled (the online monitor calls it
     at every update)."""
     return _apply(6, law.values, static, sigma, sigma_velocity)
+
+
+def damper_even_slope(law: SuspensionLaw, sigma_velocity: npt.ArrayLike) -> np.ndarray:
+    r"""Slope b (N s/m) of the damper's even part on :math:`|v| - E|v|`, v ~ N(0, σ_v²) (m/s).
+
+    :math:`F_e(v) = (F_d(v) + F_d(-v))/2` depends on |v| only; b is its least-squares slope on
+    |v|, :math:`\mathrm{Cov}(F_e, |v|)/\mathrm{Var}|v|`, by the trapezoid rule over the half-normal
+    density of |v| (2001 points to 8σ_v; F_e has a kink at the knee, which Gauss–Hermite resolves
+    poorly).
+    Below the knee it is :math:`(c_{c,lo} - c_{r,lo})/2` exactly (negative when rebound damps
+    more). 0 for a symmetric damper."""
+    sv = np.maximum(np.asarray(sigma_velocity, dtype=float), _SIGMA_FLOOR)
+    x = np.linspace(0.0, 8.0, 2001)
+    w = np.exp(-0.5 * x**2) * (x[1] - x[0])
+    w[0] *= 0.5
+    w[-1] *= 0.5
+    w = w / w.sum()
+    v = sv[..., None] * x
+    even = 0.5 * (damper_force(v, law) + damper_force(-v, law))
+    mean_v = v @ w
+    cov = ((v - mean_v[..., None]) * even) @ w
+    var = ((v - mean_v[..., None]) ** 2) @ w
+    return cov / var
+
+
+def rectified_psd(
+    f_in: npt.ArrayLike,
+    psd: npt.ArrayLike,
+    df: npt.ArrayLike,
+    f_out: npt.ArrayLike,
+    *,
+    max_lag_s: float = 4.0,
+) -> np.ndarray:
+    r"""One-sided PSD of :math:`|v| - E|v|` at `f_out` (Hz) for a zero-mean Gaussian v.
+
+    v's one-sided PSD `psd` ((..., F_in), units²/Hz) is given on `f_in` (Hz) with bin widths `df`
+    (Hz). For a bivariate normal pair of std σ and correlation ρ,
+    :math:`E|XY| = \tfrac{2\sigma^2}{\pi}(\sqrt{1-\rho^2} + \rho\arcsin\rho)` (the full-wave
+    rectifier; Papoulis & Pillai, *Probability, Random Variables and Stochastic Processes*, 4th
+    ed., 2002, ch. 9), so |v| has the autocovariance
+    :math:`C(\tau) = \tfrac{2\sigma^2}{\pi}(\sqrt{1-\rho^2} + \rho\arcsin\rho - 1)`,
+    :math:`\rho(\tau) = R(\tau)/\sigma^2` from v's PSD by the cosine transform; C's cosine
+    transform over lags up to `max_lag_s` gives the PSD, :math:`4\int_0^\infty C\cos(2\pi f\tau)\,d\tau`,
+    with Parzen's lag window over that span (its transform is ≥ 0, so is the PSD; it smooths the
+    PSD over about 1.9/`max_lag_s` Hz). `max_lag_s` must stay below 1/(2 max(df)): a PSD given
+    on bins df apart repeats its autocovariance every 1/df s. Leading term (ρ²/2): the velocity
+    spectrum convolved with itself."""
+    f_in = np.asarray(f_in, dtype=float)
+    f_out = np.asarray(f_out, dtype=float)
+    psd = np.asarray(psd, dtype=float)
+    top = max(float(f_in.max()), float(f_out.max()))
+    d_tau = 1.0 / (8.0 * top)
+    tau = np.arange(0.0, max_lag_s + 0.5 * d_tau, d_tau)
+    cov_v = (psd * np.asarray(df, dtype=float)) @ np.cos(2.0 * np.pi * f_in[:, None] * tau[None, :])
+    var = np.maximum(cov_v[..., :1], 1e-300)
+    rho = np.clip(cov_v / var, -1.0, 1.0)
+    cov_abs = (2.0 * var / np.pi) * (np.sqrt(1.0 - rho**2) + rho * np.arcsin(rho) - 1.0)
+    x = tau / max_lag_s  # Parzen's lag window
+    parzen = np.where(x <= 0.5, 1.0 - 6.0 * x**2 + 6.0 * x**3, 2.0 * (1.0 - x) ** 3)
+    weight = np.full(tau.size, d_tau) * parzen
+    weight[0] *= 0.5
+    return 4.0 * (cov_abs * weight) @ np.cos(2.0 * np.pi * tau[:, None] * f_out[None, :])

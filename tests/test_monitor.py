@@ -256,7 +256,8 @@ def test_window_kernel_matches_the_joint_estimators_profile_likelihood():
     proj = rng.exponential(1.0, (2, n_d, n_f)) * (1.0 + 1e3 * rng.exponential(1.0, (2, n_d, n_f)))
     ll, lam = np.zeros((2, n_d, n_b, n_g)), np.zeros((2, n_d, n_b, n_g))
     bounds = (np.log(1e-8), np.log(1e-1))
-    _window_loglik(proj, weight, 5, 33, base, gain, np.array([0, -1]), *bounds, ll, lam)
+    proj_grid = np.repeat(proj[:, :, None, :], n_g, axis=2)  # the same periodogram at every pressure
+    _window_loglik(proj_grid, weight, 5, 33, base, gain, np.array([0, -1]), *bounds, ll, lam)
     assert np.all(ll[1] == 0.0)  # a corner with slot −1 is skipped
     for d in range(n_d):
         for b in range(n_b):

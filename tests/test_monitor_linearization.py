@@ -79,3 +79,64 @@ def test_preview_fuses_the_rears_keeps_the_fronts_and_stays_causal(rough_loaded_
     np.testing.assert_array_equal(chunked.pressure_pa, with_preview.pressure_pa)
     _, cut = monitor_signals(t[:16000], v[:16000], acc_s[:16000], acc_u[:16000], loads=loads, preview=True)
     np.testing.assert_array_equal(cut.pressure_pa, with_preview.pressure_pa[: cut.t_s.size])
+
+
+def _expected_spectra(monitor, models, speed, gd, p_kpa, distortion):
+    """(C, 1, F, 3) expected cross-spectra of the corners: the linear full car on an ISO road (w = 2,
+    the tyre's enveloping), plus, if `distortion`, the damper's even part built here by hand: the
+    force b(|v| − E|v|), b from the low-speed slopes, through each corner's 2-DOF quarter car."""
+    import math
+    from dataclasses import replace
+
+    from suvtwin.estimators.full_car import corner_spectrum
+    from suvtwin.estimators.joint import envelope_power
+    from suvtwin.estimators.quarter_car import stiffness_from_pressure
+    from suvtwin.suspension_law import rectified_psd
+
+    f = monitor.freq
+    car = replace(models[0].full_car,
+                  tire_stiffness=(float(stiffness_from_pressure(p_kpa * 1e3)),) * 4)  # fmt: skip
+    road = 4 * np.pi**2 * gd * 0.1**2 * speed * envelope_power(f / speed, models[0].envelope_half_length)
+    out = np.zeros((len(models), 1, f.size, 3), dtype=complex)
+    for c, qc in enumerate(models):
+        spec = corner_spectrum(f, speed, car, c) * road[:, None, None]
+        if distortion:
+            rel = (spec[:, 0, 0] + spec[:, 1, 1] - 2 * spec[:, 0, 1]).real
+            vel = np.where(f >= 1.0, rel / (2 * np.pi * f) ** 2, 0.0)
+            df = monitor._group_size / monitor.config.segment_s
+            law = qc.suspension
+            b = 0.5 * (law.compression_low - law.rebound_low)  # below the knee on this smooth road
+            assert math.sqrt(vel @ df) < law.knee_velocity
+            force = b**2 * rectified_psd(f, vel, df, f, max_lag_s=1.0)
+            s = 2j * np.pi * f
+            susp = qc.spring_rate + qc.damping * s
+            a11 = qc.sprung_mass * s**2 + susp
+            a22 = qc.unsprung_mass * s**2 + susp + car.tire_stiffness[c] + qc.tire_damping * s
+            det = a11 * a22 - susp**2
+            h = np.stack([s**2 * (a22 - susp) / det, s**2 * (susp - a11) / det], axis=1)
+            spec = spec + force[:, None, None] * h[:, :, None] * np.conj(h[:, None, :])
+        spec = spec + monitor.noise * np.eye(2)[None]
+        out[c, 0] = np.stack([spec[:, 0, 0], spec[:, 1, 1], spec[:, 0, 1]], axis=-1)
+    return out
+
+
+@pytest.mark.parametrize("distortion", [False, True])
+def test_window_likelihood_peaks_at_the_truth_with_and_without_the_dampers_even_part(distortion):
+    # expected spectra (no periodogram scatter): a model holding what made them reads the truth. With
+    # the damper's even part, the noise beside the road's signal depends on (damping, pressure), and
+    # its log term must enter the likelihood (without it this read 131–155 kPa for 200)
+    from suvtwin.estimators.monitor import MonitorConfig, TyreMonitor
+    from suvtwin.pipeline.monitoring import corner_models
+
+    models = corner_models(CORNERS)
+    monitor = TyreMonitor(models, dt=1e-3, config=MonitorConfig(damper_distortion=distortion))
+    speed = 60 / 3.6
+    spec = _expected_spectra(monitor, models, speed, 16e-6, 200.0, distortion)
+    used = np.ones(len(models), dtype=bool)
+    table = np.arange(len(models))[:, None]
+    table[:, 0] = monitor._tables_for(np.arange(len(models)), spec[:, 0])[0]
+    nan = np.full(len(models), np.nan)
+    ll, _ = monitor._window_grid(spec, used, speed, table, nan, nan)
+    best = monitor._p_coarse[np.argmax(ll.max(axis=(1, 2)), axis=1)]
+    step = monitor._p_coarse[1] - monitor._p_coarse[0]
+    assert np.all(np.abs(best - 200.0) <= step), best

@@ -14,11 +14,13 @@ from suvtwin.mjcf import kernel
 from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
 from suvtwin.suspension_law import (
     SuspensionLaw,
+    damper_even_slope,
     damper_force,
     equivalent_spring_rate,
     gaussian_damper_force,
     gaussian_spring_force,
     gaussian_spring_rate,
+    rectified_psd,
     spring_force,
     spring_rate,
     static_travel,
@@ -135,3 +137,37 @@ def test_linearization_predicts_the_mujoco_suv_on_a_rough_road():
         assert float(m) == pytest.approx(s.mean(), abs=3e-3), c
         assert float(k) == pytest.approx(float(np.mean(spring_rate(s, LAWS[i]))), rel=0.05), c
         assert float(k) > 1.03 * LAWS[i].spring_rate, c  # the linear rate is too soft here
+
+
+def test_damper_even_slope_against_a_sampled_regression():
+    law = LAWS[0]
+    below = damper_even_slope(law, 1e-3)
+    assert below == pytest.approx(0.5 * (law.compression_low - law.rebound_low), rel=1e-6)
+    symmetric = SuspensionLaw(spring_rate=4e4, compression_low=2000.0, rebound_low=2000.0,
+                              compression_high=800.0, rebound_high=800.0, knee_velocity=0.13)  # fmt: skip
+    assert damper_even_slope(symmetric, 0.3) == pytest.approx(0.0, abs=1e-9)
+    rng = np.random.default_rng(2)
+    for sigma in (0.1, 0.3):  # around and beyond the knee: least squares of the even part on |v|
+        v = rng.normal(0.0, sigma, 2_000_000)
+        even = 0.5 * (damper_force(v, law) + damper_force(-v, law))
+        a = np.abs(v)
+        slope = np.cov(even, a)[0, 1] / a.var()
+        assert damper_even_slope(law, sigma) == pytest.approx(slope, rel=0.01)
+
+
+def test_rectified_psd_against_a_simulated_gaussian_process():
+    # a process with a body-like and a hop-like peak; |v|'s Welch PSD against the formula from v's
+    rng = np.random.default_rng(1)
+    fs, n = 200.0, 2**20
+    f = np.fft.rfftfreq(n, 1 / fs)
+    shape = np.exp(-0.5 * ((f - 12.0) / 1.5) ** 2) + 0.5 * np.exp(-0.5 * ((f - 1.5) / 0.4) ** 2)
+    v = np.fft.irfft((rng.normal(size=f.size) + 1j * rng.normal(size=f.size)) * np.sqrt(shape), n=n)
+    from scipy.signal import welch
+
+    fw, pv = welch(v, fs=fs, nperseg=8192)
+    fa, pa = welch(np.abs(v), fs=fs, nperseg=8192)
+    at = np.array([41, 205, 410, 820, 984, 1230])  # 1, 5, 10, 20, 24, 30 Hz
+    predicted = rectified_psd(fw[1:], pv[1:], np.full(fw.size - 1, fw[1]), fa[at], max_lag_s=4.0)
+    measured = np.array([pa[k - 20 : k + 20].mean() for k in at])
+    np.testing.assert_allclose(predicted, measured, rtol=0.1)
+    assert predicted[4] > 2 * predicted[2]  # twice the 12 Hz peak: rectification's harmonic
