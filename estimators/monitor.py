@@ -275,7 +275,7 @@ class MonitorConfig:
         sums of the suspension velocity's frequencies, which no linear model holds) to each
         window's model spectrum as known extra power (:meth:`TyreMonitor._damper_distortion`;
         corners with a suspension law). On the 100 ``constant`` runs it took the observable
-        tyres' error at 30 s from +1.9 ± 9.6 to +0.1 ± 9.6 kPa (class A +3.9 → 0.0).
+        tyres' error at 30 s from +1.9 ± 9.6 to +0.0 ± 9.6 kPa (class A +3.9 → 0.0).
     max_nonlinear_share : float
         A window whose travel (Gaussian, as linearized) reaches the bump or rebound stop, or whose
         wheel leaves the ground, more than this share of the time is not used for k_t (``rough``).

@@ -170,6 +170,7 @@ def estimate_run(
         speed_series_mps=frame["speed_mps"].to_numpy(dtype=float)[None, :],
         static_travel_m=corner_static_travel(corner, run_loads(meta), vehicle=vehicle),
         vehicle=meta.get("scenario", {}).get("vehicle") or None,
+        loads=run_loads(meta),
     )
     batch = entry.run(signals)
     metadata = {

@@ -70,7 +70,9 @@ class CornerSignals:
     `static_travel_m`: the corner's static suspension compression under the runs' extra load, m
     (for estimators that linearize the suspension at the travel they measure); `vehicle`: the
     scenario's vehicle overrides the runs were made with (their corner model's spring, damper,
-    anti-roll bar), None for the SUV's parameter file.
+    anti-roll bar), None for the SUV's parameter file; `loads`: the runs' extra loads on the
+    chassis, (kg, (x, y, z) m from its CoG) each, for estimators that model the whole car (the
+    online monitor's full car).
     """
 
     acc_sprung: np.ndarray
@@ -87,6 +89,7 @@ class CornerSignals:
     speed_series_mps: np.ndarray | None = None
     static_travel_m: float = 0.0
     vehicle: dict | None = None
+    loads: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -219,15 +222,18 @@ def _run_online(signals: CornerSignals) -> BatchEstimate:
     import numpy as np
 
     from suvtwin.estimators.monitor import TyreMonitor, pressure_at
-    from suvtwin.pipeline.estimation import linear_corner_model
+    from suvtwin.pipeline.estimation import full_car_model, linear_corner_model
     from suvtwin.tire_stiffness import (
         stiffness_at_pressure_array,
         stiffness_sigma_at_pressure_sigma,
         tire_stiffness_of,
     )
 
+    vehicle = _vehicle(signals)
+    car = full_car_model(vehicle, signals.loads, tire_file=signals.tire_file)  # the corner in its car
     qc = linear_corner_model(signals.corner, signals.sprung_mass, tire_file=signals.tire_file,
-                             static_travel=signals.static_travel_m, vehicle=_vehicle(signals))  # fmt: skip
+                             static_travel=signals.static_travel_m, vehicle=vehicle,
+                             full_car=car)  # fmt: skip
     tire = tire_stiffness_of(signals.tire_file)
     n_runs, n_steps = signals.acc_sprung.shape
     t = np.arange(n_steps) * signals.dt
