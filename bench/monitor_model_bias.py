@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import json
 import sys
+from dataclasses import replace
 
 import numpy as np
 
@@ -45,7 +46,7 @@ def _fit(p_grid, gain, proj, noise):
 def _with(car, corner, pressure_kpa):
     kt = list(car.tire_stiffness)
     kt[corner] = float(stiffness_from_pressure(pressure_kpa * 1e3))
-    return car.__class__(**{**car.__dict__, "tire_stiffness": tuple(kt)})
+    return replace(car, tire_stiffness=tuple(kt))
 
 
 def main(gd: float = 64e-6, pressure_kpa: float = 200.0) -> dict:

@@ -165,7 +165,7 @@ def wheel_responses(
     corr = rows[None, :, :, j, None] * inv[None, :, None, j, 3:] * (delta / denom)[:, :, None, None]
     per_force = rows[None, :, :, 3:] - corr  # (P, F, 2, 4)
     road = np.broadcast_to(road_ref, (n_p, n_f, 4)).copy()
-    road[:, :, corner] += (delta * np.ones(n_f)[None, :])  # the grid's own tyre rate
+    road[:, :, corner] += delta  # the grid's own tyre rate
     out = per_force * road[:, :, None, :]  # displacement per unit road elevation under each wheel
     return out * s[None, :, None, None]  # acceleration s² X per road velocity s R
 

@@ -640,8 +640,6 @@ class TyreMonitor:
         self._u11 = np.empty((n_c, n_d, 1, self.freq.size))
         self._u22 = np.empty_like(self._u11)
         self._u12 = np.empty(self._u11.shape, dtype=complex)
-        # corners placed in a full car: the gain's speed-free parts on the fine frequencies
-        self._car_a = self._car_b = None
         self._distortion = cfg.damper_distortion and any(
             qc.suspension is not None and qc.suspension.compression_low != qc.suspension.rebound_low
             for qc in self.models
@@ -649,6 +647,8 @@ class TyreMonitor:
         self._per_window_gain = self._distortion or any(
             qc.full_car is not None or qc.envelope_half_length > 0 for qc in self.models
         )
+        # corners placed in a full car: the gain's speed-free parts on the fine frequencies
+        self._car_a = self._car_b = None
         if any(qc.full_car is not None for qc in self.models):
             self._car_a = np.zeros((n_c, n_d, self._p_coarse.size, fine.size))
             self._car_b = np.zeros(self._car_a.shape, dtype=complex)
@@ -684,14 +684,15 @@ class TyreMonitor:
         qc = self.models[c]
         rate = qc.spring_rate * (1.0 + self.config.rate_step) ** step
         contact = (1.0 + self.config.rate_step) ** -lift
-        kt = contact * stiffness_from_pressure(self._p_coarse * 1e3, **asdict(self.tires[c]))
+        kt_inflated = stiffness_from_pressure(self._p_coarse * 1e3, **asdict(self.tires[c]))
+        kt = contact * kt_inflated
         for d, cd in enumerate(self.dampings[c]):
             model = replace(qc, damping=float(cd), spring_rate=rate, tire_damping=contact * qc.tire_damping)
             if qc.full_car is None:
                 g = signal_gain(self._fine[None, :], kt[:, None], model) / self.noise
                 self._gain[slot, d] = np.add.reduceat(g, self._group_start, axis=1) / self._group_size
             else:  # the full car: the speed-free parts, the speed added per window (_window_grid)
-                h = wheel_responses(self._fine, qc.full_car, qc.corner, kt / contact, spring_rate=rate,
+                h = wheel_responses(self._fine, qc.full_car, qc.corner, kt_inflated, spring_rate=rate,
                                     damping=float(cd), tire_scale=contact)  # fmt: skip
                 a_sq, cross = projected_terms(h, *signal_direction(self._fine, model))
                 self._car_a[slot, d], self._car_b[slot, d] = a_sq / self.noise, cross / self.noise
@@ -1098,10 +1099,11 @@ class TyreMonitor:
             return None
         # lags within half the coarsest bin's period (bins above merge_above_hz are merged)
         s_abs = rectified_psd(self.freq, vel[rows], df, self.freq, max_lag_s=0.5 / float(df.max()))
+        sigma_v = np.sqrt(np.maximum(rel @ self._travel_weight, 1e-12))  # the velocity's σ, m/s
         s = 2j * np.pi * self.freq
         for k, c in enumerate(rows):
             qc = self.models[c]
-            b = float(damper_even_slope(qc.suspension, math.sqrt(max(float(vel[c] @ df), 1e-12))))
+            b = float(damper_even_slope(qc.suspension, sigma_v[c]))
             k_s = qc.spring_rate if not np.isfinite(rate[c]) else float(rate[c])
             contact = 1.0 if not np.isfinite(touch[c]) else float(touch[c])
             k_t = contact * stiffness_from_pressure(self._p_coarse * 1e3, **asdict(self.tires[c]))

@@ -246,6 +246,12 @@ def corner_sprung_mass(corner: str, load_kg: float = 0.0, *, vehicle: VehiclePar
     )
 
 
+def _linear_damping(s) -> float:
+    """The digressive damper's equivalent linear damping at low speed: the mean of its low-speed
+    compression and rebound slopes, N s/m."""
+    return 0.5 * (s.damper_compression_low + s.damper_rebound_low)
+
+
 def linear_corner_model(
     corner: str,
     sprung_mass: float,
@@ -278,13 +284,13 @@ def linear_corner_model(
         sprung_mass=sprung_mass,
         unsprung_mass=float(vehicle.unsprung_mass[i]),
         spring_rate=float(vehicle.spring_rate[i]),
-        damping=0.5 * (s.damper_compression_low + s.damper_rebound_low),
+        damping=_linear_damping(s),
         tire_damping=float(load_tire(tire_file or vehicle.tire_file).vertical_damping),
         roll_mass=float(vehicle.chassis.inertia_roll / (2.0 * half_track**2)),
         anti_roll=float(s.anti_roll_front if front else s.anti_roll_rear),
         damping_range=(
             0.5 * (s.damper_compression_high + s.damper_rebound_high),
-            0.5 * (s.damper_compression_low + s.damper_rebound_low),
+            _linear_damping(s),
         ),
         suspension=SuspensionLaw.of(s, spring_rate=float(vehicle.spring_rate[i])),
         static_travel=float(static_travel),
@@ -317,7 +323,7 @@ def full_car_model(
     pitch = c.inertia_pitch + own.sum() + float(masses @ (rel[:, 0] ** 2 + rel[:, 2] ** 2))
     roll = c.inertia_roll + own.sum() + float(masses @ (rel[:, 1] ** 2 + rel[:, 2] ** 2))
     tire = load_tire(tire_file or vehicle.tire_file)
-    damping = 0.5 * (s.damper_compression_low + s.damper_rebound_low)
+    damping = _linear_damping(s)
     return FullCar(
         sprung_mass=total,
         inertia_pitch=pitch,
