@@ -4,6 +4,7 @@ Usual call::
 
     car = full_car_model(load_vehicle())          # suvtwin.pipeline.estimation, or FullCar(...)
     S = corner_spectrum(f, speed, car, corner=2, kt=kt)   # (F, 2, 2) per unit road-velocity PSD
+    G = track_responses(f, car, car.wheelbase / speed)    # (F, 8, 2): all eight channels, S = S_v G G^H
 
 Model (the textbook full-car ride model, e.g. Jazar [1]_ ch. 15; Gillespie [2]_ ch. 5): a rigid
 body of mass m with pitch and roll inertias about its centre of gravity rests on four vertical
@@ -58,7 +59,15 @@ import numpy.typing as npt
 
 from suvtwin.errors import InputError
 
-__all__ = ["TRACKS", "FullCar", "corner_spectrum", "gain_at_delay", "projected_terms", "wheel_responses"]
+__all__ = [
+    "TRACKS",
+    "FullCar",
+    "corner_spectrum",
+    "gain_at_delay",
+    "projected_terms",
+    "track_responses",
+    "wheel_responses",
+]
 
 TRACKS = ((0, 2), (1, 3))
 """(front, rear) wheel indices of the left and the right track, corners ordered fl, fr, rl, rr."""
@@ -103,6 +112,29 @@ class FullCar:
         return float(0.5 * ((xy[0, 0] - xy[2, 0]) + (xy[1, 0] - xy[3, 0])))
 
 
+def _body_matrices(
+    car: FullCar, spring_rate: np.ndarray, damping: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    r"""The suspension's part of the equations of motion, coordinates q = (z, θ, φ, z_u fl, fr, rl, rr).
+
+    `spring_rate`, `damping` (4,) per corner (N/m, N s/m). Returns the body points' Jacobian (4, 3)
+    (:math:`z_{b,i} = z + x_i\theta + y_i\varphi`, rows fl, fr, rl, rr) and the stiffness (N/m),
+    damping (N s/m) and mass (kg) matrices (7, 7) of V and the dissipation function without the
+    tyres (module docstring), which act on the wheels' diagonal."""
+    xy = np.asarray(car.corner_xy, dtype=float)
+    jac = np.c_[np.ones(4), xy[:, 0], xy[:, 1]]  # body point above each corner: z + x θ + y φ
+    sel = np.zeros((4, 7))  # compression s = z_u − z_b
+    sel[:, :3] = -jac
+    sel[np.arange(4), 3 + np.arange(4)] = 1.0
+    k_corner = np.diag(spring_rate)
+    for (left, right), k_bar in zip(((0, 1), (2, 3)), car.anti_roll, strict=True):
+        k_corner[np.ix_((left, right), (left, right))] += k_bar * np.array([[1.0, -1.0], [-1.0, 1.0]])
+    stiff = sel.T @ k_corner @ sel
+    damp = sel.T @ np.diag(damping) @ sel
+    mass = np.diag([car.sprung_mass, car.inertia_pitch, car.inertia_roll, *car.unsprung_mass])
+    return jac, stiff, damp, mass
+
+
 def wheel_responses(
     f: npt.ArrayLike,
     car: FullCar,
@@ -121,25 +153,15 @@ def wheel_responses(
     (P, F, 2, 4): [p, f, 0 body / 1 wheel, road wheel fl, fr, rl, rr], (m/s²)/(m/s)."""
     f = np.atleast_1d(np.asarray(f, dtype=float))
     kt = np.atleast_1d(np.asarray(kt, dtype=float))
-    xy = np.asarray(car.corner_xy, dtype=float)
-    jac = np.c_[np.ones(4), xy[:, 0], xy[:, 1]]  # body point above each corner: z + x θ + y φ
-    sel = np.zeros((4, 7))  # compression s = z_u − z_b
-    sel[:, :3] = -jac
-    sel[np.arange(4), 3 + np.arange(4)] = 1.0
     ks = np.array(car.spring_rate, dtype=float)
     cs = np.array(car.damping, dtype=float)
     if spring_rate is not None:
         ks[corner] = spring_rate
     if damping is not None:
         cs[corner] = damping
-    k_corner = np.diag(ks)
-    for (left, right), k_bar in zip(((0, 1), (2, 3)), car.anti_roll, strict=True):
-        k_corner[np.ix_((left, right), (left, right))] += k_bar * np.array([[1.0, -1.0], [-1.0, 1.0]])
+    jac, stiff, damp, mass = _body_matrices(car, ks, cs)
     kt_all = np.array(car.tire_stiffness, dtype=float)
     ct_all = np.array(car.tire_damping, dtype=float)
-    stiff = sel.T @ k_corner @ sel
-    damp = sel.T @ np.diag(cs) @ sel
-    mass = np.diag([car.sprung_mass, car.inertia_pitch, car.inertia_roll, *car.unsprung_mass])
     s = 2j * np.pi * f  # (F,)
     n_p, n_f = kt.size, f.size
     # dynamic stiffness (F, 7, 7) with the corner's tyre at the car's, inverted once per frequency;
@@ -207,3 +229,35 @@ def corner_spectrum(
         g = h[:, :, front] + h[:, :, rear] * lag
         out += g[:, :, None] * np.conj(g[:, None, :])
     return out
+
+
+def track_responses(f: npt.ArrayLike, car: FullCar, delay_s: float) -> np.ndarray:
+    r"""All eight accelerations per unit road velocity of each track, every tyre at the car's own.
+
+    `f` (F,) Hz; `delay_s` the front→rear delay τ = wheelbase / speed (s). Returns complex
+    (F, 8, 2), (m/s²)/(m/s): output 2·corner + (0 body above the corner, 1 its wheel), corners fl,
+    fr, rl, rr; column the track (0 left, 1 right, :data:`TRACKS`). One 7 × 7 solve per frequency
+    of :math:`(K + sC + s^2M)\,X = (K_t + sC_t)\,R`, s = i2πf (module docstring), then
+    acceleration per road velocity :math:`s^2X/(sR) = sX/R` and, per track,
+
+    .. math:: g = h_{\text{front}} + h_{\text{rear}}\,e^{-i2\pi f\tau},
+
+    so the eight channels' spectrum is :math:`S_v\,G G^H` (G the returned (8, 2) per frequency):
+    each corner's 2×2 block is :func:`corner_spectrum`'s."""
+    f = np.atleast_1d(np.asarray(f, dtype=float))
+    jac, stiff, damp, mass = _body_matrices(car, np.asarray(car.spring_rate, dtype=float),
+                                            np.asarray(car.damping, dtype=float))  # fmt: skip
+    s = 2j * np.pi * f  # (F,)
+    tyre = np.asarray(car.tire_stiffness, dtype=float)[None, :] + s[:, None] * np.asarray(car.tire_damping)
+    dyn = stiff[None] + s[:, None, None] * damp[None] + (s**2)[:, None, None] * mass[None]  # (F, 7, 7)
+    wheels = 3 + np.arange(4)
+    dyn[:, wheels, wheels] += tyre
+    force = np.zeros((f.size, 7, 4), dtype=complex)  # generalised force per unit road elevation
+    force[:, wheels, np.arange(4)] = tyre
+    x = np.linalg.solve(dyn, force)  # (F, 7, 4): displacement per road elevation under each wheel
+    out = np.zeros((8, 7))
+    out[0::2, :3] = jac  # body point above each corner
+    out[1::2, 3:] = np.eye(4)  # its wheel
+    h = s[:, None, None] * np.einsum("oj,fjw->fow", out, x)  # (F, 8, 4) per road velocity
+    lag = np.exp(-2j * np.pi * f * delay_s)[:, None]
+    return np.stack([h[:, :, front] + h[:, :, rear] * lag for front, rear in TRACKS], axis=-1)

@@ -13,6 +13,7 @@ from suvtwin.estimators.full_car import (
     corner_spectrum,
     gain_at_delay,
     projected_terms,
+    track_responses,
     wheel_responses,
 )
 from suvtwin.estimators.joint import LinearQuarterCar, corner_response, signal_direction
@@ -93,6 +94,35 @@ def test_projected_gain_at_a_delay_is_the_spectrum_along_the_direction():
     u = np.stack([u1, u2], axis=1)
     along = np.einsum("fi,fij,fj->f", np.conj(u), spec, u).real
     np.testing.assert_allclose(gain, along, rtol=1e-10)
+
+
+@pytest.mark.parametrize("speed", [8.0, 27.0])
+def test_track_responses_give_each_corners_spectrum(speed):
+    # one 7×7 solve per frequency for all eight channels against the corner-by-corner rank-one grid
+    # (a second implementation): each corner's 2×2 block of Σ_tracks g g^H is corner_spectrum's
+    car = replace(CAR, tire_stiffness=(2.1e5, 2.6e5, 1.8e5, 2.3e5))
+    f = np.linspace(0.2, 30.0, 61)
+    g = track_responses(f, car, car.wheelbase / speed)
+    assert g.shape == (f.size, 8, 2)
+    spec = np.einsum("fit,fjt->fij", g, np.conj(g))
+    for c in range(4):
+        block = spec[:, 2 * c : 2 * c + 2, 2 * c : 2 * c + 2]
+        np.testing.assert_allclose(block, corner_spectrum(f, speed, car, c), rtol=1e-9, atol=1e-12)
+
+
+def test_track_responses_follow_a_slow_road():
+    # at 0.1 mHz the car follows its road: both tracks together lift every point alike, and on a car
+    # with equal front and rear tracks one track's road is a rigid plane (the left up, the right
+    # still), so acceleration per road velocity is s = i2πf on its side and 0 on the other
+    f = np.array([1e-4])
+    s = 2j * np.pi * f[0]
+    g = track_responses(f, CAR, CAR.wheelbase / 15.0)[0] / s  # (8, 2)
+    np.testing.assert_allclose(g.sum(axis=1), np.ones(8), atol=1e-3)
+    xy = np.asarray(CAR.corner_xy)
+    equal = replace(CAR, corner_xy=tuple((float(x), float(np.sign(y)) * xy[0, 1]) for x, y in xy))
+    g = track_responses(f, equal, equal.wheelbase / 15.0)[0] / s
+    left = np.repeat([1.0, 0.0, 1.0, 0.0], 2)  # fl body, fl wheel, fr body, ..., rr wheel
+    np.testing.assert_allclose(g, np.stack([left, 1.0 - left], axis=1), atol=1e-3)
 
 
 def test_rear_wheels_rerunning_the_front_road_shape_the_body_spectrum():
