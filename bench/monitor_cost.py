@@ -1,6 +1,6 @@
 """Cost of the online monitor over a long drive: is the cost per second of data the same after an hour?
 
-Run: ``python bench/monitor_cost.py [minutes] [run.parquet] [--preview]`` — prints JSON.
+Run: ``python bench/monitor_cost.py [minutes] [run.parquet] [--no-preview]`` — prints JSON.
 
 A MuJoCo run (default: a 60 s class C run at 90 km/h with four different pressures, simulated
 here) is streamed through one four-corner :class:`suvtwin.estimators.monitor.TyreMonitor` again
@@ -10,8 +10,8 @@ over the last minute, their ratio (the issue asks ≤ 1.2 at one hour; single mi
 the machine's load, so also the ratio of the medians of the last and first five minutes and the
 spread over all minutes), the real-time factor
 over the whole drive (asks ≥ 500), the state's size at the start and the end (bytes), and the
-compile time of the first call (excluded from the rates). ``--preview``: with both tracks'
-front→rear preview (off by default, as in :func:`suvtwin.pipeline.monitoring.monitor_run`).
+compile time of the first call (excluded from the rates). With both tracks' front→rear preview,
+as :func:`suvtwin.pipeline.monitoring.monitor_run` by default; ``--no-preview``: without.
 """
 
 from __future__ import annotations
@@ -47,8 +47,8 @@ def _run_file() -> str:
 
 
 def main() -> None:
-    args = [a for a in sys.argv[1:] if a != "--preview"]
-    preview = "--preview" in sys.argv[1:]
+    args = [a for a in sys.argv[1:] if a != "--no-preview"]
+    preview = "--no-preview" not in sys.argv[1:]
     minutes = float(args[0]) if len(args) > 0 else 60.0
     path = args[1] if len(args) > 1 else _run_file()
     from suvtwin.estimators.monitor import TyreMonitor
@@ -62,7 +62,7 @@ def main() -> None:
     acc_s = frame[[f"{c}_accel_sprung_mps2" for c in CORNERS]].to_numpy()
     acc_u = frame[[f"{c}_accel_unsprung_mps2" for c in CORNERS]].to_numpy()
     n = t0.size
-    tracks = ((0, 2), (1, 3)) if preview else ()  # both tracks' preview, or none (the default)
+    tracks = ((0, 2), (1, 3)) if preview else ()  # both tracks' preview (the default), or none
     monitor = TyreMonitor(corner_models(CORNERS), dt=dt, names=CORNERS, tracks=tracks,
                           wheelbase_m=load_vehicle().wheelbase)
     chunk = int(round(10.0 / dt))

@@ -1,8 +1,9 @@
 """The four-corner tyre-pressure monitor (issue 12) on MuJoCo ground truth, one scenario set at a time.
 
 Run: ``python bench/monitor_mujoco.py --set constant --runs 100 [--jobs 2] [--corner-model roll_plane]
-[--preview]`` — prints JSON (``--corner-model``: the monitor's corner model, default the full car;
-``--preview``: rears fused with the front→rear preview, off by default as in ``suvtwin monitor``).
+[--no-preview]`` — prints JSON (``--corner-model``: the monitor's corner model, default the full car;
+``--no-preview``: each tyre on its own, without the front→rear preview that ``suvtwin monitor``
+uses by default).
 Sets (:mod:`suvtwin.pipeline.monitor_scenarios`): ``constant``, ``slow_leak``, ``drop``,
 ``low_speed``, ``warning``, ``nominal_long``; every road level drawn anywhere in its class
 band, seeds from 900000 on (none a test uses). Default 4 runs per set (the issue asks for
@@ -127,7 +128,8 @@ def main(argv: list[str] | None = None) -> dict:
     )
     add("--corner-model", default="full_car", choices=("full_car", "roll_plane"),
         help="how the monitor models each corner (default full_car; roll_plane: the model before)")
-    add("--preview", action="store_true", help="fuse each rear tyre with its track's front→rear preview")
+    add("--no-preview", dest="preview", action="store_false",
+        help="each tyre on its own (default: rears fused with their track's front→rear preview)")
     add("--discard-runs", action="store_true", help="delete run files once monitored")
     add("--simulate-only", action="store_true", help="fill the run cache, run no monitor")
     args = parser.parse_args(argv)

@@ -43,7 +43,7 @@ rectangular, linear detrend; above ``merge_above_hz`` the periodogram is average
    finite, negative or changes by more than ``max_speed_change`` within it, and one at a
    speed whose spectral band (``band_cycles_per_m`` times the speed) stops below
    ``hop_margin`` times the corner's wheel-hop frequency: there k_t barely changes the
-   spectrum (the Cramér–Rao bound at 25 km/h is ~60 kPa after 10 s), so the window is not
+   spectrum and the model's errors near the resonance set the estimate, so the window is not
    used for k_t. Each skip is counted, by reason, in the output; nothing is fatal.
 2. **Each window's likelihood on a grid.** Each used window's 2×2 cross-periodogram of
    (sprung, unsprung) acceleration gives its Whittle log-likelihood on a fixed grid of the
@@ -112,10 +112,12 @@ rectangular, linear detrend; above ``merge_above_hz`` the periodogram is average
    update the rear's pressure given the front's estimate (Laplace along the likelihood's ridge, with
    a model-error floor) is fused with the rear's own (:func:`suvtwin.estimators.preview.fuse_track`)
    if the two agree within ``preview_gate`` combined σ (an innovation gate; rejections counted);
-   the front keeps its own. A front that is not observable passes nothing on. On the MuJoCo SUV the
-   preview sharpens the rears but, where the rear does not follow the front's track (weaves,
-   curves), pulls them low: with it, 3 false warnings in 501 simulated minutes at nominal
-   pressure, without it none (README).
+   the front keeps its own. A front that is not observable passes nothing on. A track is fed only
+   the blocks where both its corners' windows are used (not ``rough``, not ``low_speed``), and its
+   preview is used only while the two wheels are coherent (``PreviewConfig.min_coherence``):
+   where the rear wheel does not follow the front's road the ratio is attenuated and pulls the
+   rear low (before these gates: 3–4 false warnings in 506 simulated minutes at nominal
+   pressure, README).
 8. **Observability.** A corner whose σ exceeds ``observable_sigma_kpa`` (no usable data for a
    while: low speed, flat road, faulty sensor) is flagged not observable; its estimate
    then relaxes toward the prior (``prior_pressure_kpa`` ± ``prior_sigma_kpa``) as the filter's
@@ -216,7 +218,15 @@ class MonitorConfig:
         A rear's preview is fused only if it lies within this many combined σ of the rear's own
         estimate (an innovation gate).
     band_cycles_per_m : (float, float)
-        Spatial-frequency band used, cycles/m (times the speed: Hz).
+        Spatial-frequency band used, cycles/m (times the speed: Hz). Up to 3 cycles/m (ISO 8608's
+        classes span 0.011–2.83 cycles/m; the simulator's roads reach 10): the band then reaches
+        ``max_frequency_hz`` from 24 km/h on, past the wheel hop where k_t shapes the spectrum. With
+        1.5 cycles/m it stopped at the hop below about 40 km/h: on the ``low_speed`` runs
+        (20–35 km/h) every update was flagged not observable, and on ``nominal_long`` the first
+        windows above the margin (36 km/h, band to 1.35 times the hop) read a front tyre 60 kPa
+        low: a false warning. With 3 cycles/m: ``low_speed`` 70 % of the updates observable,
+        +3.3 ± 18.2 kPa at 10 s, 2 of 560 updates beyond 3σ; ``constant`` and ``nominal_long``
+        unchanged (no false warning in 506 min).
     max_frequency_hz : float
         Upper limit of the band, Hz. 20 Hz: above it the MuJoCo SUV's wheel acceleration exceeds
         the linear full car's by 7–17 % (20–25 Hz, twice the wheel hop; 3–7 % below 20 Hz) on
@@ -247,7 +257,14 @@ class MonitorConfig:
         Step of the pressure grid each window's likelihood is evaluated on, kPa (interpolated to
         1 kPa by a cubic spline for the posteriors: the log-likelihood is smooth on that scale).
     hop_margin : float
-        A segment informs k_t only if its band reaches this times the wheel-hop frequency.
+        A segment informs k_t only if its band reaches this times the corner's nominal wheel-hop
+        frequency. With the band ending barely past the resonance, the roll-off above it that pins
+        k_t is missing and what the model leaves out there (the damper's even part, the
+        suspension's non-linearity) sets the estimate: with the band to 1.5 cycles/m and a margin
+        of 1.25, a front tyre read 30–50 kPa low at 33.5 km/h with σ 12–16 kPa (beyond 3σ); with
+        3 cycles/m and 1.35, the error over σ had a std of 1.25 at 19–25 km/h (band to 1.4–1.6
+        times the hop), 1.04 at 25–30 and 0.83 at 30–36 km/h. 1.6: the SUV's fronts are used from
+        21 km/h, its rears from 23 km/h.
     max_speed_change : float
         Largest (max − min)/mean speed within a used segment.
     accel_range_mps2 : float or None
@@ -295,7 +312,7 @@ class MonitorConfig:
     road_change_s: float = 60.0
     preview_memory_s: float = 32.0
     preview_gate: float = 3.0
-    band_cycles_per_m: tuple[float, float] = (0.05, 1.5)
+    band_cycles_per_m: tuple[float, float] = (0.05, 3.0)
     max_frequency_hz: float = 20.0
     merge_above_hz: float = 3.0
     merge_width_hz: float = 0.5
@@ -308,7 +325,7 @@ class MonitorConfig:
     waviness_points: int = 5
     damping_points: int = 3
     grid_step_kpa: float = 8.0
-    hop_margin: float = 1.25
+    hop_margin: float = 1.6
     max_speed_change: float = 0.1
     accel_range_mps2: float | None = None
     max_accel_mps2: float = 1000.0
@@ -454,18 +471,17 @@ def _window_loglik(proj, weight, lo, hi, base, gain, slot, lam_lo, lam_hi, out_l
                             excess += weight[f] * max(proj[c, d, g, f] - 1.0, 0.0)
                         lam = math.log(max(excess, 1e-12) / max(total, 1e-300))
                     lam = min(max(lam, lam_lo), lam_hi)
-                    ll = info = slope = 0.0
-                    for _ in range(50):
+                    info = slope = score = step = 0.0
+                    level = math.exp(lam)
+                    for _ in range(50):  # Fisher scoring: the score and information only
                         level = math.exp(lam)
-                        ll = score = info = slope = 0.0
+                        score = info = slope = 0.0
                         for f in range(lo, hi):
                             r = level * base[b, f] * gain[s, d, g, f]
                             inv = 1.0 / (1.0 + r)
                             q = r * inv
                             wf = weight[f]
-                            pw = proj[c, d, g, f]
-                            ll -= wf * (math.log1p(r) + pw * inv)
-                            score += wf * q * (pw * inv - 1.0)
+                            score += wf * q * (proj[c, d, g, f] * inv - 1.0)
                             wq2 = wf * q * q
                             info += wq2
                             slope += wq2 * (1.0 - q)
@@ -474,10 +490,16 @@ def _window_loglik(proj, weight, lo, hi, base, gain, slot, lam_lo, lam_hi, out_l
                         step = new - lam
                         lam = new
                         if abs(step) < 0.02:
-                            # the last step's gain and the information there, to second order
-                            ll += score * step - 0.5 * info * step * step
-                            info *= math.exp(2.0 * step * slope / info)
                             break
+                    # ℓ where the last step started (its logarithms once, not per iteration) ...
+                    ll = 0.0
+                    for f in range(lo, hi):
+                        r = level * base[b, f] * gain[s, d, g, f]
+                        ll -= weight[f] * (math.log1p(r) + proj[c, d, g, f] / (1.0 + r))
+                    if abs(step) < 0.02:
+                        # ... and the last step's gain and the information there, to second order
+                        ll += score * step - 0.5 * info * step * step
+                        info *= math.exp(2.0 * step * slope / info)
                     out_ll[c, d, b, g] = ll - 0.5 * math.log(max(info, 1e-300))
                     out_lam[c, d, b, g] = lam
                     lam2, lam1 = lam1, lam
@@ -618,6 +640,9 @@ class TyreMonitor:
         self._log_prior = log_prior - _logsumexp(log_prior, axis=1)[:, None]  # (C, P)
         n_d = cfg.damping_points
         self._fine = fine
+        # each corner's tyre stiffness on the coarse pressure grid (eq. 3–4), N/m
+        self._kt_coarse = np.array([stiffness_from_pressure(self._p_coarse * 1e3, **asdict(t))
+                                    for t in self.tires])  # fmt: skip
         self._hop_hz = np.empty(n_c)
         self.dampings = np.empty((n_c, n_d))
         for c, qc in enumerate(self.models):
@@ -684,7 +709,7 @@ class TyreMonitor:
         qc = self.models[c]
         rate = qc.spring_rate * (1.0 + self.config.rate_step) ** step
         contact = (1.0 + self.config.rate_step) ** -lift
-        kt_inflated = stiffness_from_pressure(self._p_coarse * 1e3, **asdict(self.tires[c]))
+        kt_inflated = self._kt_coarse[c]
         kt = contact * kt_inflated
         for d, cd in enumerate(self.dampings[c]):
             model = replace(qc, damping=float(cd), spring_rate=rate, tire_damping=contact * qc.tire_damping)
@@ -977,7 +1002,6 @@ class TyreMonitor:
         elapsed = cfg.update_s if not np.isfinite(s.last_segment_t) else t_end - s.last_segment_t
         s.last_segment_t = t_end
         changing_before = s.fit.changing > 0.5
-        self._feed_previews(block, s.blocks[-1], elapsed)
         analysed_rate, analysed_touch = np.full(n_c, np.nan), np.full(n_c, np.nan)
         s.level = math.nan
         self._predict(elapsed)  # time passes: the pressures may drift or change, with or without data
@@ -1002,6 +1026,9 @@ class TyreMonitor:
                 s.counts["used"][rough_c] -= 1
                 s.counts["rough"][rough_c] += 1
                 used = used & ~rough_c
+        # the preview gets the block where both of a track's corners passed every check (rough and
+        # low-speed windows included: there the ratio of the two wheels' responses leaves its model)
+        self._feed_previews(block, status, elapsed)
         if np.any(used):
             ll, lam = self._window_grid(spec, used, speed, table, analysed_rate, analysed_touch)
             self._correct(ll, np.where(used, w_c, 0.0), used)
@@ -1016,7 +1043,8 @@ class TyreMonitor:
         return self._output(t_end, speed, status, analysed_rate, analysed_touch)
 
     def _feed_previews(self, block, status: np.ndarray, elapsed: float) -> None:
-        """Forget and add the new block to each track's preview (a corner's faulty block as NaN)."""
+        """Forget and add the new block to each track's preview (NaN unless both corners' windows
+        are used: `status` the update's per corner)."""
         if not self._previews:
             return
         _, v, a_s, a_u = block
@@ -1100,13 +1128,17 @@ class TyreMonitor:
         # lags within half the coarsest bin's period (bins above merge_above_hz are merged)
         s_abs = rectified_psd(self.freq, vel[rows], df, self.freq, max_lag_s=0.5 / float(df.max()))
         sigma_v = np.sqrt(np.maximum(rel @ self._travel_weight, 1e-12))  # the velocity's σ, m/s
+        slope = np.empty(len(self.models))
+        for law in {self.models[c].suspension for c in rows}:  # one call per damper law
+            same = [c for c in rows if self.models[c].suspension == law]
+            slope[same] = damper_even_slope(law, sigma_v[same])
         s = 2j * np.pi * self.freq
         for k, c in enumerate(rows):
             qc = self.models[c]
-            b = float(damper_even_slope(qc.suspension, sigma_v[c]))
+            b = float(slope[c])
             k_s = qc.spring_rate if not np.isfinite(rate[c]) else float(rate[c])
             contact = 1.0 if not np.isfinite(touch[c]) else float(touch[c])
-            k_t = contact * stiffness_from_pressure(self._p_coarse * 1e3, **asdict(self.tires[c]))
+            k_t = contact * self._kt_coarse[c]
             k_tc = k_t[:, None] + contact * qc.tire_damping * s[None, :]  # (G, F): each grid pressure
             for d, cd in enumerate(self.dampings[c]):
                 susp = k_s + cd * s

@@ -528,9 +528,10 @@ def monitor_command(
         str, typer.Option(help="Tyres to monitor, comma-separated among fl, fr, rl, rr.")
     ] = "fl,fr,rl,rr",
     preview: Annotated[
-        bool, typer.Option("--preview", help="Fuse each rear tyre with its track's front→rear preview "
-                           "(sharper rears, but false warnings in weaves and curves: off by default).")
-    ] = False,
+        bool, typer.Option("--preview/--no-preview", help="Fuse each rear tyre with its track's "
+                           "front→rear preview where the two wheels are coherent (--no-preview: each "
+                           "tyre on its own).")
+    ] = True,
 ) -> None:
     """Monitor all tyres' pressures online (causal, streaming) and warn of deflation (UN R141 / FMVSS 138)."""
     _check_out(out, "--out", (".parquet",))

@@ -93,7 +93,7 @@ def monitor_signals(
     tire_file: str | Path | None = None,
     config: MonitorConfig | None = None,
     chunk_s: float = 10.0,
-    preview: bool = False,
+    preview: bool = True,
     vehicle=None,
     corner_model: str = "full_car",
 ) -> tuple[TyreMonitor, MonitorUpdate]:
@@ -101,7 +101,8 @@ def monitor_signals(
 
     `acc_sprung`, `acc_unsprung`: (T, C) in the order of `corners`; `loads`: the extra loads on the
     chassis, (kg, (x, y, z) m from the CoG) each (:func:`corner_models`); `preview`: fuse each rear
-    tyre with the front→rear preview of its track (when both its corners are monitored); `vehicle`:
+    tyre with the front→rear preview of its track (when both its corners are monitored; default on,
+    False: each corner on its own); `vehicle`:
     the car's parameters (default the SUV's parameter file); `corner_model`: :data:`CORNER_MODELS`."""
     vehicle = vehicle or load_vehicle()
     t = np.asarray(t_s, dtype=float)
@@ -137,7 +138,7 @@ def monitor_run(
     config: MonitorConfig | None = None,
     rule: DeflationRule | None = None,
     chunk_s: float = 10.0,
-    preview: bool = False,
+    preview: bool = True,
     corner_model: str = "full_car",
 ) -> MonitorResult:
     """Run the monitor and the deflation warning on a run file.

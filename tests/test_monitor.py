@@ -115,7 +115,7 @@ def _prior_sigma_pa() -> float:
 
 
 def test_low_speed_is_flagged_not_observable(runs):
-    # at 20 km/h the band 0.05-1.5 cycles/m ends at 8 Hz, below the wheel hop (~12 Hz)
+    # at 20 km/h the band 0.05-3 cycles/m ends at 16.7 Hz, short of 1.6 times the wheel hop (~12 Hz)
     out = _feed(TyreMonitor([QC] * 2, dt=DT), runs.acc[:2], 20 / 3.6, 5000)
     assert np.all(out.status == SKIP_REASONS.index("low_speed"))
     assert not np.any(out.observable)

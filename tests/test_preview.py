@@ -157,6 +157,26 @@ def test_little_data_is_not_informative(linear_run):
     assert quiet.conditional(200.0, 5.0).reason == "low_snr"
 
 
+def test_a_rear_off_the_fronts_track_is_incoherent_and_refused(linear_run):
+    # the rear on the front's road: coherence near 1 (the noise removed); the rear on another road
+    # of the same level (it does not follow the front's track): its least-squares ratio would be
+    # attenuated by the coherence and read the rear soft, so the preview refuses it
+    front, rear, speed = linear_run
+    _, other = _two_corners(205.0, 165.0, speed, 30.0, seed=8)
+    qf, qr = _models()
+    tire = suv_tire_stiffness()
+    same = PreviewTrack(qf, qr, tire, tire, DT, WHEELBASE)
+    off = PreviewTrack(qf, qr, tire, tire, DT, WHEELBASE)
+    same.add(front, rear, speed)
+    off.add(front, other, speed)
+    assert same.coherence() > 0.95
+    assert off.coherence() < 0.2
+    assert same.conditional(205.0, 0.0).informative
+    refused = off.conditional(205.0, 0.0)
+    assert not refused.informative and refused.reason == "incoherent" and refused.coherence < 0.2
+    assert np.isnan(PreviewTrack(qf, qr, tire, tire, DT, WHEELBASE).coherence())  # no data
+
+
 def test_a_short_memory_follows_a_pressure_change():
     """The rear drops 200 → 160 kPa at 12 s: at 24 s the memory forgetting with τ = 3 s is at the new
     pressure within its σ, the one that never forgets sits between the two."""
