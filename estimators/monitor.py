@@ -440,9 +440,10 @@ def _window_loglik(proj, weight, lo, hi, base, gain, slot, lam_lo, lam_hi, out_l
     (score U = :math:`\sum w q (P/(1+r) - 1)`, information :math:`I = \sum w q^2`, q = r/(1 + r));
     out_ll = ℓ(λ̂) − ½ log I(λ̂) (Laplace's integral over λ with a flat prior, up to a constant
     common to the whole grid), out_lam = λ̂. Each pressure starts from its neighbours' λ̂
-    extrapolated along the grid; once a step δ is below 0.02 it is the last, and ℓ and log I are
-    carried to its end to second order (ℓ + Uδ − Iδ²/2; dlog I/dλ = 2Σwq²(1 − q)/I): one pass
-    over the band per grid point where the start is good.
+    extrapolated along the grid; once a step δ is below 0.02 it is the last: ℓ (the only sum with
+    logarithms) is evaluated once, where that step starts, and ℓ and log I are carried to its end
+    to second order (ℓ + Uδ − Iδ²/2; dlog I/dλ = 2Σwq²(1 − q)/I): two passes over the band per
+    grid point where the start is good.
 
     `proj` (C, D, G, F): u^H S u / N of the window (dimensionless; per pressure where the noise
     beside the road's signal depends on it, the damper's even part); `weight` (F,): Fourier
@@ -471,8 +472,7 @@ def _window_loglik(proj, weight, lo, hi, base, gain, slot, lam_lo, lam_hi, out_l
                             excess += weight[f] * max(proj[c, d, g, f] - 1.0, 0.0)
                         lam = math.log(max(excess, 1e-12) / max(total, 1e-300))
                     lam = min(max(lam, lam_lo), lam_hi)
-                    info = slope = score = step = 0.0
-                    level = math.exp(lam)
+                    level = info = slope = score = step = 0.0
                     for _ in range(50):  # Fisher scoring: the score and information only
                         level = math.exp(lam)
                         score = info = slope = 0.0
@@ -1026,8 +1026,8 @@ class TyreMonitor:
                 s.counts["used"][rough_c] -= 1
                 s.counts["rough"][rough_c] += 1
                 used = used & ~rough_c
-        # the preview gets the block where both of a track's corners passed every check (rough and
-        # low-speed windows included: there the ratio of the two wheels' responses leaves its model)
+        # the preview gets the block where both of a track's corners passed every check, the rough
+        # and low-speed ones too: there the ratio of the two wheels' responses leaves its model
         self._feed_previews(block, status, elapsed)
         if np.any(used):
             ll, lam = self._window_grid(spec, used, speed, table, analysed_rate, analysed_touch)

@@ -774,7 +774,10 @@ class PreviewTrack:
         :math:`|C_g|^2/(A'_g B'_g)`, C, A, B summed over the band, A' and B' less the
         accelerometers' noise (−, clipped to [0, 1]; NaN without such a band)."""
         mem = self._memory(memory)
-        _, keep, kg = self._terms(mem)
+        return self._coherence(mem, self._terms(mem))
+
+    def _coherence(self, mem: int, terms) -> float:
+        _, keep, kg = terms
         if not np.any(keep):
             return float("nan")
         noise = kg * self._noise_dft
@@ -815,7 +818,7 @@ class PreviewTrack:
         n_eff = k * k / k2 if k2 > 0 else 0.0
         terms = self._terms(mem)
         bands = int(np.sum(terms[1]))
-        coherence = self.coherence(memory=mem)
+        coherence = self._coherence(mem, terms)
 
         def result(mean, sigma, reason, sig_lik=float("nan"), slope=float("nan")):
             return PreviewConditional(
