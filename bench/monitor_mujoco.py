@@ -129,7 +129,7 @@ def main(argv: list[str] | None = None) -> dict:
     add("--corner-model", default="full_car", choices=("full_car", "roll_plane"),
         help="how the monitor models each corner (default full_car; roll_plane: the model before)")
     add("--no-preview", dest="preview", action="store_false",
-        help="each tyre on its own (default: rears fused with their track's front→rear preview)")
+        help="each tyre on its own (default: each track's two tyres fused through its front→rear preview)")
     add("--discard-runs", action="store_true", help="delete run files once monitored")
     add("--simulate-only", action="store_true", help="fill the run cache, run no monitor")
     args = parser.parse_args(argv)

@@ -10,7 +10,8 @@ at each time T of ``--times`` it gives the rear pressure (i) given the TRUE fron
 pressure (σ_f = 0), (ii) given the monitor's front estimate and σ at its last update at or before T
 (:func:`suvtwin.pipeline.monitoring.monitor_run`, columns ``{c}_pressure_hat_kpa``,
 ``{c}_pressure_sigma_kpa``), beside (iii) the monitor's own rear estimate, and (iv) both pressures
-fused (:func:`~suvtwin.estimators.preview.fuse_track`: the monitor's front and rear and the preview).
+fused (:func:`~suvtwin.estimators.preview.fuse_track`: the monitor's front and rear and the preview,
+their errors correlated by ``--correlation``, default the monitor's).
 Errors (estimate − truth, kPa): mean ± std and the share within ±2σ, over all tracks and split by
 the track's dynamic load coefficient (≤ / > ``rough_dlc``, the preview's own, accumulated up to T);
 the preview's rows only where it says it is informative (counted). Cost: wall time of ``add`` per
@@ -27,6 +28,7 @@ from pathlib import Path
 import numpy as np
 import pyarrow.parquet as pq
 
+from suvtwin.estimators.monitor import MonitorConfig
 from suvtwin.estimators.preview import PreviewConfig, PreviewTrack, fuse_track
 from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
 from suvtwin.pipeline.estimation import run_load_and_tire, run_loads
@@ -69,6 +71,10 @@ def main() -> None:
         "--memory-s", type=float, default=None, help="forgetting time constant τ, s (default none)"
     )
     ap.add_argument("--sigma-scale", type=float, default=PreviewConfig.sigma_scale)
+    ap.add_argument(
+        "--correlation", type=float, default=MonitorConfig.preview_correlation,
+        help="correlation of the front's and rear's own errors in the fusion (default the monitor's)",
+    )  # fmt: skip
     a = ap.parse_args()
     times = [float(x) for x in a.times.split(",")]
     paths = sorted(Path(a.runs_dir).glob("*.parquet"))[: a.runs]
@@ -132,7 +138,8 @@ def main() -> None:
                         row["monitor_front_own"] = {"mean": pf, "sigma": sf}
                         pr, sr = row["monitor_rear"]["mean"], row["monitor_rear"]["sigma"]
                         if given.informative and sr > 0:
-                            m, cv = fuse_track(min(max(pf, lo), hi), sf, pr, sr, given)
+                            pf_in = min(max(pf, lo), hi)
+                            m, cv = fuse_track(pf_in, sf, pr, sr, given, correlation=a.correlation)
                             row["fused_front"] = {"mean": float(m[0]), "sigma": float(np.sqrt(cv[0, 0]))}
                             row["fused_rear"] = {"mean": float(m[1]), "sigma": float(np.sqrt(cv[1, 1]))}
                 rows.append(row)
@@ -160,6 +167,7 @@ def main() -> None:
         "tracks": 2 * len(paths),
         "config": {k: getattr(config, k) for k in config.__dataclass_fields__},
         "memory_s": a.memory_s,
+        "correlation": a.correlation,
         "rows": {
             f"{key}@{T:g}s": {name: table(key, T, c) for name, c in splits.items()}
             for key in keys

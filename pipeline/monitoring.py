@@ -100,8 +100,8 @@ def monitor_signals(
     """Stream arrays through a new monitor in chunks of `chunk_s` s; the monitor and all its rows.
 
     `acc_sprung`, `acc_unsprung`: (T, C) in the order of `corners`; `loads`: the extra loads on the
-    chassis, (kg, (x, y, z) m from the CoG) each (:func:`corner_models`); `preview`: fuse each rear
-    tyre with the front→rear preview of its track (when both its corners are monitored; default on,
+    chassis, (kg, (x, y, z) m from the CoG) each (:func:`corner_models`); `preview`: fuse each track's
+    two tyres through its front→rear preview (when both its corners are monitored; default on,
     False: each corner on its own); `vehicle`:
     the car's parameters (default the SUV's parameter file); `corner_model`: :data:`CORNER_MODELS`."""
     vehicle = vehicle or load_vehicle()

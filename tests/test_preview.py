@@ -310,6 +310,34 @@ def test_fusion_is_the_posterior_of_the_linearized_ridge():
         fuse_track(200.0, 10.0, 185.0, 0.0, cond)
 
 
+def test_fusion_with_correlated_estimates_on_a_grid():
+    """fuse_track with correlated own estimates against the grid posterior of the correlated prior
+    times the ridge's likelihood; the correlation narrows the front less (the ridge pins only
+    p_r − s p_f, and a shared error moves both), and the limits are refused."""
+    cond = PreviewConditional(
+        mean_kpa=171.0, sigma_kpa=float("nan"), informative=True, reason="", sigma_likelihood_kpa=2.0,
+        ridge_slope=1.05, cov_front_rear_kpa2=float("nan"), floor_kpa=4.0, dlc=0.1, segments=30.0,
+        bands_used=5,
+    )  # fmt: skip
+    rho, sf, sr = 0.6, 10.0, 12.0
+    mean, cov = fuse_track(200.0, sf, 185.0, sr, cond, correlation=rho)
+    pf, pr = np.meshgrid(np.arange(130.0, 270.0, 0.25), np.arange(110.0, 260.0, 0.25), indexing="ij")
+    prior = np.array([[sf**2, rho * sf * sr], [rho * sf * sr, sr**2]])
+    d0 = np.stack([pf - 200.0, pr - 185.0])
+    log_w = -0.5 * np.einsum("iab,ij,jab->ab", d0, np.linalg.inv(prior), d0)
+    log_w -= (pr - 171.0 - 1.05 * (pf - 200.0)) ** 2 / (2 * (2.0**2 + 4.0**2))
+    w = np.exp(log_w - log_w.max())
+    w /= w.sum()
+    m = np.array([np.sum(w * pf), np.sum(w * pr)])
+    d = np.stack([pf - m[0], pr - m[1]])
+    np.testing.assert_allclose(mean, m, atol=1e-6)
+    np.testing.assert_allclose(cov, np.einsum("iab,jab,ab->ij", d, d, w), atol=1e-4)
+    _, independent = fuse_track(200.0, sf, 185.0, sr, cond)
+    assert independent[0, 0] < cov[0, 0] < sf**2
+    with pytest.raises(InputError, match="correlation"):
+        fuse_track(200.0, sf, 185.0, sr, cond, correlation=1.0)
+
+
 @pytest.mark.parametrize(
     ("make", "field"),
     [
