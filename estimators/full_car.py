@@ -35,6 +35,25 @@ h the corner's response to unit road velocity under one wheel. Projected on a fi
 that phase, so :func:`projected_terms` returns the speed-free parts and :func:`gain_at_delay` adds
 the speed.
 
+**The tyres' lateral slip** (optional: a car with ``cornering_stiffness`` and a speed given). The
+wheels hang from the body on vertical slides, so when the body rolls about its centre of gravity
+the wheel centres, a height :math:`h_w` below it, slide sideways at :math:`h_w\dot\varphi`; the
+tyres resist that slip with their cornering stiffness :math:`C_i` (MF-Tyre's :math:`K_{y\alpha}`
+at the static load), a force at the ground, :math:`h_c` below the centre of gravity. With the
+car's lateral velocity v and yaw rate r as two more coordinates (the linear single-track model
+of Pacejka [3]_ ch. 1, Rajamani [4]_ §2.3, here with roll) and the tyres' lateral relaxation
+length σ (a first-order lag, :math:`\tilde C_i = C_i/(1 + s\sigma/V)`), at speed V:
+
+.. math:: F_{y,i} = -\tilde C_i\,\frac{v + x_i r + h_w\dot\varphi}{V},\qquad
+   M(\dot v + V r) = \sum_i F_{y,i},\qquad I_z\dot r = \sum_i x_i F_{y,i},
+
+and the roll equation gains :math:`-h_c\sum_i F_{y,i}`: roll damping that falls with speed and
+a sway the body cannot follow above about 1 Hz. Without it the full car over-predicts MuJoCo's
+body acceleration at 2–3 Hz (MuJoCo 0.35–0.72 of its power at 36–100 km/h); with it 0.94–1.16
+(``tests/test_vehicle_model.py``). The vertical responses then depend on the speed beyond the
+front→rear delay, so :func:`wheel_responses` and :func:`track_responses` take ``speed_mps``
+(None: no lateral slip, the speed-free model the tables of :func:`projected_terms` need).
+
 Why this model: the roll-plane corner model of :class:`suvtwin.estimators.joint.LinearQuarterCar`
 (half a heave quarter car plus half a roll quarter car with the whole roll inertia on one axle)
 misses that the body's roll is carried by both axles' springs and bars, and that the rear wheels
@@ -48,6 +67,10 @@ References
 .. [1] R. N. Jazar, *Vehicle Dynamics: Theory and Application*, 3rd ed., Springer, 2017, ch. 15
    (full-car vibrating model).
 .. [2] T. D. Gillespie, *Fundamentals of Vehicle Dynamics*, SAE, 1992, ch. 5 (ride).
+.. [3] H. B. Pacejka, *Tire and Vehicle Dynamics*, 3rd ed., Butterworth-Heinemann, 2012, ch. 1
+   (the linear single-track model) and ch. 7 (relaxation length).
+.. [4] R. Rajamani, *Vehicle Dynamics and Control*, 2nd ed., Springer, 2012, §2.3 (lateral
+   dynamic model: bicycle model, its eigenvalues).
 """
 
 from __future__ import annotations
@@ -81,7 +104,12 @@ class FullCar:
     gravity), ``corner_xy`` (4 × (x, y), m from it, x forward, y left), ``unsprung_mass`` (kg),
     ``spring_rate`` (N/m at the wheel), ``damping`` (N s/m, linear equivalent), ``anti_roll``
     ((front, rear) wheel-rate equivalents of the bars, N/m), ``tire_stiffness`` (N/m) and
-    ``tire_damping`` (N s/m) per corner. ``wheelbase`` (m) is the front-to-rear distance."""
+    ``tire_damping`` (N s/m) per corner. ``wheelbase`` (m) is the front-to-rear distance.
+
+    The tyres' lateral slip (module docstring), all optional: ``cornering_stiffness`` (N/rad per
+    corner; None: no lateral slip), ``cog_height`` (m, the body's centre of gravity above the
+    ground), ``wheel_centre_height`` (m above the ground), ``inertia_yaw`` (kg m², the whole car
+    about the vertical through the centre of gravity), ``relaxation_length`` (m, lateral)."""
 
     sprung_mass: float
     inertia_pitch: float
@@ -93,6 +121,11 @@ class FullCar:
     anti_roll: tuple[float, float]
     tire_stiffness: tuple[float, ...]
     tire_damping: tuple[float, ...]
+    cornering_stiffness: tuple[float, ...] | None = None
+    cog_height: float = 0.0
+    wheel_centre_height: float = 0.0
+    inertia_yaw: float = 0.0
+    relaxation_length: float = 0.0
 
     def __post_init__(self) -> None:
         per_corner = ("corner_xy", "unsprung_mass", "spring_rate", "damping", "tire_stiffness",
@@ -104,6 +137,14 @@ class FullCar:
                     *self.spring_rate, *self.tire_stiffness]  # fmt: skip
         if not all(np.isfinite(positive)) or min(positive) <= 0:
             raise InputError("full car masses, inertias, spring rates and tyre stiffnesses must be > 0")
+        if self.cornering_stiffness is not None:
+            lateral = [*self.cornering_stiffness, self.inertia_yaw, self.cog_height]
+            if len(self.cornering_stiffness) != 4 or not all(np.isfinite(lateral)) or min(lateral) <= 0:
+                raise InputError("full car cornering_stiffness needs 4 entries > 0 N/rad, with "
+                                 "inertia_yaw and cog_height > 0")  # fmt: skip
+            if not (0.0 <= self.wheel_centre_height < self.cog_height and self.relaxation_length >= 0):
+                raise InputError("full car wheel_centre_height must be in [0, cog_height) m and "
+                                 "relaxation_length ≥ 0 m")  # fmt: skip
 
     @property
     def wheelbase(self) -> float:
@@ -135,6 +176,41 @@ def _body_matrices(
     return jac, stiff, damp, mass
 
 
+def _dynamic_stiffness(car: FullCar, s: np.ndarray, stiff, damp, mass, speed_mps: float | None) -> np.ndarray:
+    r"""The suspension's dynamic stiffness :math:`K + sC + s^2M` (F, n, n), s = i2πf (F,), without the
+    tyres' vertical terms; with the tyres' lateral slip (module docstring) when the car has
+    ``cornering_stiffness`` and `speed_mps` is given: n = 9, coordinates (z, θ, φ, z_u × 4, Y, Ψ),
+    the lateral displacement Y and heading Ψ with v = sY and r = sΨ; else n = 7."""
+    dyn7 = stiff[None] + s[:, None, None] * damp[None] + (s**2)[:, None, None] * mass[None]
+    if car.cornering_stiffness is None or speed_mps is None:
+        return dyn7
+    if not speed_mps > 0:
+        raise InputError(f"speed must be > 0 m/s for the tyres' lateral slip, got {speed_mps!r}")
+    v = float(speed_mps)
+    x = np.asarray(car.corner_xy, dtype=float)[:, 0]
+    lag = 1.0 + s[:, None] * car.relaxation_length / v  # the lateral relaxation's first-order lag
+    c = np.asarray(car.cornering_stiffness, dtype=float)[None, :] / lag  # (F, 4) N/rad
+    c_sum, c_x, c_xx = c.sum(axis=1) / v, (c * x).sum(axis=1) / v, (c * x * x).sum(axis=1) / v
+    h_c = car.cog_height
+    h_w = car.cog_height - car.wheel_centre_height
+    total = car.sprung_mass + float(np.sum(car.unsprung_mass))
+    dyn = np.zeros((s.size, 9, 9), dtype=complex)
+    dyn[:, :7, :7] = dyn7
+    # −h_c Σ F_y on the roll row; F_y,i = −C̃_i (v + x_i r + h_w φ̇)/V with v = sY, r = sΨ
+    dyn[:, 2, 2] += h_c * h_w * c_sum * s
+    dyn[:, 2, 7] = h_c * c_sum * s
+    dyn[:, 2, 8] = h_c * c_x * s
+    # M(v̇ + V r) − Σ F_y = 0
+    dyn[:, 7, 7] = total * s**2 + c_sum * s
+    dyn[:, 7, 8] = total * v * s + c_x * s
+    dyn[:, 7, 2] = h_w * c_sum * s
+    # I_z ṙ − Σ x_i F_y = 0
+    dyn[:, 8, 8] = car.inertia_yaw * s**2 + c_xx * s
+    dyn[:, 8, 7] = c_x * s
+    dyn[:, 8, 2] = h_w * c_x * s
+    return dyn
+
+
 def wheel_responses(
     f: npt.ArrayLike,
     car: FullCar,
@@ -144,12 +220,14 @@ def wheel_responses(
     spring_rate: float | None = None,
     damping: float | None = None,
     tire_scale: float = 1.0,
+    speed_mps: float | None = None,
 ) -> np.ndarray:
     """Corner `corner`'s (body, wheel) acceleration per unit road velocity under each wheel.
 
     `f` (F,) Hz; `kt` (P,) N/m: the corner's own tyre stiffness (the other tyres keep the car's);
     `spring_rate`, `damping`: the corner's own (default the car's); `tire_scale`: its tyre's
-    stiffness and damping are multiplied by it (the share of time in contact). Returns complex
+    stiffness and damping are multiplied by it (the share of time in contact); `speed_mps`: with
+    the tyres' lateral slip at that speed (module docstring; None: without). Returns complex
     (P, F, 2, 4): [p, f, 0 body / 1 wheel, road wheel fl, fr, rl, rr], (m/s²)/(m/s)."""
     f = np.atleast_1d(np.asarray(f, dtype=float))
     kt = np.atleast_1d(np.asarray(kt, dtype=float))
@@ -171,21 +249,21 @@ def wheel_responses(
     ct[corner] *= tire_scale
     road_ref = np.array(kt_all, dtype=complex)[None, :] + s[:, None] * ct[None, :]  # (F, 4) per elevation
     road_ref[:, corner] += kt_ref - kt_all[corner]
-    dyn = stiff[None] + s[:, None, None] * damp[None] + (s**2)[:, None, None] * mass[None]  # (F, 7, 7)
+    dyn = _dynamic_stiffness(car, s, stiff, damp, mass, speed_mps)  # (F, n, n)
     idx = 3 + np.arange(4)
     dyn[:, idx, idx] += road_ref
     inv = np.linalg.inv(dyn)
-    out_rows = np.zeros((2, 7))
+    out_rows = np.zeros((2, dyn.shape[-1]))
     out_rows[0, :3] = jac[corner]
     out_rows[1, 3 + corner] = 1.0
-    rows = np.einsum("ij,fjk->fik", out_rows, inv)  # (F, 2, 7): outputs per unit force on each DOF
+    rows = np.einsum("ij,fjk->fik", out_rows, inv)  # (F, 2, n): outputs per unit force on each DOF
     j = 3 + corner
     delta = tire_scale * kt[:, None] - kt_ref  # (P, 1): the grid's change of the corner's tyre rate
     denom = 1.0 + delta * inv[None, :, j, j]  # (P, F)
     # C D⁻¹ e_w for the wheels' DOFs w:
     # rows[:, :, 3 + w] − δ rows[:, :, j] D0⁻¹[j, 3 + w] / (1 + δ D0⁻¹[j, j])
-    corr = rows[None, :, :, j, None] * inv[None, :, None, j, 3:] * (delta / denom)[:, :, None, None]
-    per_force = rows[None, :, :, 3:] - corr  # (P, F, 2, 4)
+    corr = rows[None, :, :, j, None] * inv[None, :, None, j, 3:7] * (delta / denom)[:, :, None, None]
+    per_force = rows[None, :, :, 3:7] - corr  # (P, F, 2, 4)
     road = np.broadcast_to(road_ref, (n_p, n_f, 4)).copy()
     road[:, :, corner] += delta  # the grid's own tyre rate
     out = per_force * road[:, :, None, :]  # displacement per unit road elevation under each wheel
@@ -214,15 +292,17 @@ def gain_at_delay(a_sq: np.ndarray, cross: np.ndarray, f: np.ndarray, delay_s: f
 
 
 def corner_spectrum(
-    f: npt.ArrayLike, speed_mps: float, car: FullCar, corner: int, kt: float | None = None
+    f: npt.ArrayLike, speed_mps: float, car: FullCar, corner: int, kt: float | None = None,
+    *, lateral: bool = False,
 ) -> np.ndarray:
     """Corner `corner`'s 2×2 spectrum of (body, wheel) acceleration per unit road-velocity PSD of each
-    track, (F, 2, 2) complex, at `speed_mps`; `kt` its tyre's stiffness (default the car's)."""
+    track, (F, 2, 2) complex, at `speed_mps`; `kt` its tyre's stiffness (default the car's);
+    `lateral`: with the tyres' lateral slip (the car needs ``cornering_stiffness``)."""
     if not speed_mps > 0:
         raise InputError(f"speed must be > 0 m/s, got {speed_mps!r}")
     f = np.atleast_1d(np.asarray(f, dtype=float))
     kt = car.tire_stiffness[corner] if kt is None else kt
-    h = wheel_responses(f, car, corner, np.array([kt]))[0]  # (F, 2, 4)
+    h = wheel_responses(f, car, corner, np.array([kt]), speed_mps=speed_mps if lateral else None)[0]
     lag = np.exp(-2j * np.pi * f * car.wheelbase / speed_mps)[:, None]
     out = np.zeros((f.size, 2, 2), dtype=complex)
     for front, rear in TRACKS:
@@ -231,7 +311,9 @@ def corner_spectrum(
     return out
 
 
-def track_responses(f: npt.ArrayLike, car: FullCar, delay_s: float) -> np.ndarray:
+def track_responses(
+    f: npt.ArrayLike, car: FullCar, delay_s: float, *, speed_mps: float | None = None
+) -> np.ndarray:
     r"""All eight accelerations per unit road velocity of each track, every tyre at the car's own.
 
     `f` (F,) Hz; `delay_s` the front→rear delay τ = wheelbase / speed (s). Returns complex
@@ -243,18 +325,19 @@ def track_responses(f: npt.ArrayLike, car: FullCar, delay_s: float) -> np.ndarra
     .. math:: g = h_{\text{front}} + h_{\text{rear}}\,e^{-i2\pi f\tau},
 
     so the eight channels' spectrum is :math:`S_v\,G G^H` (G the returned (8, 2) per frequency):
-    each corner's 2×2 block is :func:`corner_spectrum`'s."""
+    each corner's 2×2 block is :func:`corner_spectrum`'s. `speed_mps`: with the tyres' lateral
+    slip at that speed (None: without)."""
     f = np.atleast_1d(np.asarray(f, dtype=float))
     jac, stiff, damp, mass = _body_matrices(car, np.asarray(car.spring_rate, dtype=float),
                                             np.asarray(car.damping, dtype=float))  # fmt: skip
     s = 2j * np.pi * f  # (F,)
     tyre = np.asarray(car.tire_stiffness, dtype=float)[None, :] + s[:, None] * np.asarray(car.tire_damping)
-    dyn = stiff[None] + s[:, None, None] * damp[None] + (s**2)[:, None, None] * mass[None]  # (F, 7, 7)
+    dyn = _dynamic_stiffness(car, s, stiff, damp, mass, speed_mps)  # (F, n, n)
     wheels = 3 + np.arange(4)
     dyn[:, wheels, wheels] += tyre
-    force = np.zeros((f.size, 7, 4), dtype=complex)  # generalised force per unit road elevation
+    force = np.zeros((f.size, dyn.shape[-1], 4), dtype=complex)  # generalised force per unit road elevation
     force[:, wheels, np.arange(4)] = tyre
-    x = np.linalg.solve(dyn, force)  # (F, 7, 4): displacement per road elevation under each wheel
+    x = np.linalg.solve(dyn, force)[:, :7]  # (F, 7, 4): displacement per road elevation under each wheel
     out = np.zeros((8, 7))
     out[0::2, :3] = jac  # body point above each corner
     out[1::2, 3:] = np.eye(4)  # its wheel

@@ -26,7 +26,7 @@ from suvtwin.estimators.full_car import FullCar
 from suvtwin.estimators.joint import LinearQuarterCar
 from suvtwin.estimators.quarter_car import sprung_mass_share
 from suvtwin.files import atomic_write, read_parquet_table
-from suvtwin.mjcf.tire import load_tire
+from suvtwin.mjcf.tire import load_tire, tire_forces_array
 from suvtwin.mjcf.vehicle import CORNERS, GRAVITY, VehicleParams, load_vehicle
 from suvtwin.pipeline.estimator_registry import CornerSignals, estimate_columns, find_estimator
 from suvtwin.pipeline.scoring import PRESSURE_TOLERANCE_KPA, run_metrics
@@ -301,7 +301,8 @@ def linear_corner_model(
 
 
 def full_car_model(
-    vehicle: VehicleParams | None = None, loads=(), *, tire_file: str | Path | None = None
+    vehicle: VehicleParams | None = None, loads=(), *, tire_file: str | Path | None = None,
+    lateral: bool = False,
 ) -> FullCar:
     """The SUV as a linear full car (:class:`suvtwin.estimators.full_car.FullCar`) with extra `loads`
     ((kg, (x, y, z) m from the chassis CoG) each, :func:`run_loads`).
@@ -311,7 +312,15 @@ def full_car_model(
     and the loads' together (parallel axes), the corners' positions taken from the new centre of
     gravity. Dampers at the mean of their low-speed compression and rebound slopes; tyres at
     their nominal stiffness (eq. 3–4 at the reference pressure) and radial damping. `vehicle`:
-    default the SUV's parameter file; `tire_file`: default the vehicle's tyre."""
+    default the SUV's parameter file; `tire_file`: default the vehicle's tyre.
+
+    `lateral`: with the tyres' lateral slip (:mod:`suvtwin.estimators.full_car`): each tyre's
+    cornering stiffness is the MF-Tyre slope dF_y/dα at zero slip, its static load and nominal
+    pressure, a front's lowered by its lateral-force compliance steer, C/(1 + C c_f) (the rears'
+    toe compliance, 1.75e-6 rad/N, is left out); the centre of gravity's height is the chassis's
+    with the loads; the wheel centres at the unloaded radius less the mean static deflection;
+    the yaw inertia the car's with the loads (parallel axes); the tyre's lateral relaxation
+    length."""
     vehicle = vehicle or load_vehicle()
     c, s = vehicle.chassis, vehicle.suspension
     masses = np.array([c.mass] + [float(m) for m, _ in loads])
@@ -324,6 +333,9 @@ def full_car_model(
     roll = c.inertia_roll + own.sum() + float(masses @ (rel[:, 1] ** 2 + rel[:, 2] ** 2))
     tire = load_tire(tire_file or vehicle.tire_file)
     damping = _linear_damping(s)
+    extra = {}
+    if lateral:
+        extra = _lateral_parameters(vehicle, tire, loads, masses, rel, own, cog)
     return FullCar(
         sprung_mass=total,
         inertia_pitch=pitch,
@@ -335,7 +347,36 @@ def full_car_model(
         anti_roll=(float(s.anti_roll_front), float(s.anti_roll_rear)),
         tire_stiffness=(float(tire.vertical_stiffness_nominal),) * 4,
         tire_damping=(float(tire.vertical_damping),) * 4,
+        **extra,
     )
+
+
+def _lateral_parameters(vehicle: VehicleParams, tire, loads, masses, rel, own, cog) -> dict:
+    """:func:`full_car_model`'s lateral-slip fields (its docstring): masses (kg), positions
+    relative to the combined centre of gravity (m) and own inertias of the chassis and the loads."""
+    c = vehicle.chassis
+    loads_z = np.zeros(4)  # static wheel loads, N: the chassis's and the loads' weight by lever arms
+    for mass, (x, y, _) in ((c.mass, (0.0, 0.0, 0.0)), *loads):
+        for i, corner in enumerate(CORNERS):
+            front, left = corner.startswith("f"), corner.endswith("l")
+            track = c.track_front if front else c.track_rear
+            axle = (c.a2 + x) / vehicle.wheelbase if front else (c.a1 - x) / vehicle.wheelbase
+            loads_z[i] += mass * GRAVITY * axle * (0.5 + (y if left else -y) / track)
+    loads_z += np.asarray(vehicle.unsprung_mass, dtype=float) * GRAVITY
+    slip = 1e-5  # rad: the MF curve is linear there
+    _, fy = tire_forces_array(loads_z, 0.0, slip, tire.nominal_pressure, tire)
+    cornering = np.abs(fy) / slip
+    cornering[:2] /= 1.0 + cornering[:2] * vehicle.steering.compliance_steer_front
+    deflection = float(np.mean(loads_z)) / float(tire.vertical_stiffness_nominal)
+    yaw = c.inertia_yaw_total + float(own[1:].sum()) + float(masses[1:] @ (rel[1:, 0] ** 2 + rel[1:, 1] ** 2))
+    yaw += c.mass * float(rel[0, 0] ** 2 + rel[0, 1] ** 2)
+    return {
+        "cornering_stiffness": tuple(float(k) for k in cornering),
+        "cog_height": float(c.cog_height + cog[2]),
+        "wheel_centre_height": float(tire.unloaded_radius - deflection),
+        "inertia_yaw": float(yaw),
+        "relaxation_length": float(vehicle.tire.relaxation_length_lateral),
+    }
 
 
 def write_estimate(result: EstimateRun, path: str | Path) -> None:

@@ -134,6 +134,75 @@ def test_rear_wheels_rerunning_the_front_road_shape_the_body_spectrum():
     assert abs(slow[1, 1, 1].real / fast[1, 1, 1].real - 1.0) < 0.05
 
 
+LATERAL = full_car_model(VEHICLE, lateral=True)
+
+
+def test_lateral_block_is_the_single_track_model_of_rajamani():
+    # without roll and relaxation, the (lateral velocity, yaw rate) rows are the linear bicycle
+    # model: their determinant vanishes at the eigenvalues of Rajamani's state matrix (2012, eq.
+    # 2.31), written here from the textbook with each axle's two tyres (C_f, C_r per tyre, l_f, l_r)
+    from suvtwin.estimators.full_car import _body_matrices, _dynamic_stiffness
+
+    car = replace(LATERAL, relaxation_length=0.0)
+    v = 20.0
+    m = car.sprung_mass + sum(car.unsprung_mass)
+    iz = car.inertia_yaw
+    cf, cr = car.cornering_stiffness[0], car.cornering_stiffness[2]
+    lf, lr = car.corner_xy[0][0], -car.corner_xy[2][0]
+    a = np.array([
+        [-(2 * cf + 2 * cr) / (m * v), -v - (2 * cf * lf - 2 * cr * lr) / (m * v)],
+        [-(2 * lf * cf - 2 * lr * cr) / (iz * v), -(2 * lf**2 * cf + 2 * lr**2 * cr) / (iz * v)],
+    ])  # fmt: skip
+    _, stiff, damp, mass = _body_matrices(car, np.asarray(car.spring_rate), np.asarray(car.damping))
+    for lam in np.linalg.eigvals(a):
+        block = _dynamic_stiffness(car, np.array([lam]), stiff, damp, mass, v)[0, 7:9, 7:9] / lam
+        scale = abs(block[0, 0] * block[1, 1]) + abs(block[0, 1] * block[1, 0])
+        assert abs(np.linalg.det(block)) < 1e-9 * scale
+
+
+def test_lateral_slip_damps_the_roll_and_vanishes_at_high_speed():
+    f = np.linspace(0.3, 20.0, 80)
+    base = track_responses(f, LATERAL, LATERAL.wheelbase / 17.0)
+    # the cornering stiffnesses act as C/V: at a speed where that is nil the model is the vertical one
+    fast = track_responses(f, LATERAL, LATERAL.wheelbase / 17.0, speed_mps=1e9)
+    np.testing.assert_allclose(fast, base, rtol=1e-6, atol=1e-9)
+    # at road speed the body's roll peak (2–3 Hz) is damped, the wheel hop is not touched
+    slow = track_responses(f, LATERAL, LATERAL.wheelbase / 17.0, speed_mps=17.0)
+    roll = (f >= 2.0) & (f <= 3.0)
+    hop = (f >= 9.0) & (f <= 15.0)
+    body = lambda g: np.sum(np.abs(g[:, 0, :]) ** 2, axis=-1)  # noqa: E731 - fl's body, both tracks
+    wheel = lambda g: np.sum(np.abs(g[:, 1, :]) ** 2, axis=-1)  # noqa: E731
+    assert np.mean(body(slow)[roll]) < 0.8 * np.mean(body(base)[roll])
+    np.testing.assert_allclose(wheel(slow)[hop], wheel(base)[hop], rtol=0.03)
+    # a car without cornering stiffness ignores the speed; bad lateral parameters are refused
+    np.testing.assert_array_equal(track_responses(f, CAR, 0.2, speed_mps=17.0), track_responses(f, CAR, 0.2))
+    with pytest.raises(InputError, match="wheel_centre_height"):
+        replace(LATERAL, wheel_centre_height=1.0)
+    with pytest.raises(InputError, match="cornering_stiffness"):
+        replace(LATERAL, cornering_stiffness=(1.0, 1.0, 1.0))
+    with pytest.raises(InputError, match="speed"):
+        track_responses(f, LATERAL, 0.2, speed_mps=0.0)
+
+
+def test_lateral_parameters_come_from_the_tyre_and_the_loads():
+    # cornering stiffness: the MF slope at the static load (fronts heavier, less by their compliance
+    # steer); a load up and behind raises the centre of gravity and adds yaw inertia
+    c = LATERAL.cornering_stiffness
+    assert c[0] == c[1] and c[2] == c[3]
+    from suvtwin.mjcf.tire import load_tire, tire_forces_array
+
+    tire = load_tire(VEHICLE.tire_file)
+    fz_front = VEHICLE.chassis.mass * 9.81 * VEHICLE.chassis.a2 / VEHICLE.wheelbase / 2 + 61.14 * 9.81
+    _, fy = tire_forces_array(fz_front, 0.0, 1e-3, tire.nominal_pressure, tire)
+    raw = abs(float(fy)) / 1e-3
+    assert c[0] == pytest.approx(raw / (1 + raw * VEHICLE.steering.compliance_steer_front), rel=2e-3)
+    assert 40e3 < c[0] < 80e3 and 40e3 < c[2] < 80e3
+    loaded = full_car_model(VEHICLE, ((250.0, (-1.0, 0.0, 0.3)),), lateral=True)
+    assert loaded.cog_height > LATERAL.cog_height and loaded.inertia_yaw > LATERAL.inertia_yaw
+    assert loaded.cornering_stiffness[2] > c[2]
+    assert 0.3 < LATERAL.wheel_centre_height < 0.37 < LATERAL.cog_height
+
+
 def test_bad_car_and_speed_are_refused():
     with pytest.raises(InputError, match="one entry per corner"):
         replace(CAR, spring_rate=(1.0, 2.0))
