@@ -85,6 +85,31 @@ def test_preview_fuses_each_track_and_stays_causal(rough_loaded_run):
     np.testing.assert_array_equal(cut.pressure_pa, with_preview.pressure_pa[: cut.t_s.size])
 
 
+def test_windows_near_the_rough_limit_count_less(rough_loaded_run):
+    # on the class D road with 250 kg aboard the loaded rears' windows spend a few per cent of the
+    # time on a stop: their likelihood is tempered toward the rough limit (nonlinear_taper_from), so
+    # the rears end wider than with every used window at full weight; the fronts (lighter) hardly move
+    from suvtwin.errors import InputError
+    from suvtwin.estimators.monitor import MonitorConfig
+
+    table, loads = rough_loaded_run
+    t = table["t_s"].to_numpy()
+    v = table["speed_mps"].to_numpy()
+    acc_s = table[[f"{c}_accel_sprung_mps2" for c in CORNERS]].to_numpy()
+    acc_u = table[[f"{c}_accel_unsprung_mps2" for c in CORNERS]].to_numpy()
+    truth = table[[f"{c}_pressure_kpa" for c in CORNERS]].to_numpy()[-1]
+    full = MonitorConfig(nonlinear_taper_from=MonitorConfig().max_nonlinear_share)
+    _, tapered = monitor_signals(t, v, acc_s, acc_u, loads=loads, preview=False)
+    _, untapered = monitor_signals(t, v, acc_s, acc_u, loads=loads, preview=False, config=full)
+    sig_t, sig_u = tapered.pressure_sigma_pa[-1] / 1e3, untapered.pressure_sigma_pa[-1] / 1e3
+    assert np.all(sig_t >= sig_u - 1e-9)
+    assert np.all(sig_t[2:] > 1.05 * sig_u[2:])
+    err = tapered.pressure_pa[-1] / 1e3 - truth
+    assert np.all(np.abs(err) <= 3.0 * sig_t)
+    with pytest.raises(InputError, match="nonlinear_taper_from"):
+        MonitorConfig(nonlinear_taper_from=0.2)
+
+
 def _expected_spectra(monitor, models, speed, gd, p_kpa, distortion):
     """(C, 1, F, 3) expected cross-spectra of the corners: the linear full car on an ISO road (w = 2,
     the tyre's enveloping), plus, if `distortion`, the damper's even part built here by hand: the
