@@ -28,6 +28,16 @@ def rough_loaded_run():
     return result.table, run_loads(result.metadata)
 
 
+def _signals(run):
+    """Time (s), speed (m/s), sprung and unsprung accelerations (T, 4), the final true pressures (kPa)
+    and the loads of a simulated run."""
+    table, loads = run
+    acc_s = table[[f"{c}_accel_sprung_mps2" for c in CORNERS]].to_numpy()
+    acc_u = table[[f"{c}_accel_unsprung_mps2" for c in CORNERS]].to_numpy()
+    truth = table[[f"{c}_pressure_kpa" for c in CORNERS]].to_numpy()[-1]
+    return table["t_s"].to_numpy(), table["speed_mps"].to_numpy(), acc_s, acc_u, truth, loads
+
+
 def test_equivalent_rate_and_contact_match_the_simulated_suspension(rough_loaded_run):
     table, loads = rough_loaded_run
     t = table["t_s"].to_numpy()
@@ -60,12 +70,7 @@ def test_equivalent_rate_and_contact_match_the_simulated_suspension(rough_loaded
 
 
 def test_preview_fuses_each_track_and_stays_causal(rough_loaded_run):
-    table, loads = rough_loaded_run
-    t = table["t_s"].to_numpy()
-    v = table["speed_mps"].to_numpy()
-    acc_s = table[[f"{c}_accel_sprung_mps2" for c in CORNERS]].to_numpy()
-    acc_u = table[[f"{c}_accel_unsprung_mps2" for c in CORNERS]].to_numpy()
-    truth = table[[f"{c}_pressure_kpa" for c in CORNERS]].to_numpy()[-1]
+    t, v, acc_s, acc_u, truth, loads = _signals(rough_loaded_run)
     mon, with_preview = monitor_signals(t, v, acc_s, acc_u, loads=loads, preview=True)
     _, alone = monitor_signals(t, v, acc_s, acc_u, loads=loads, preview=False)
     assert mon.tracks == ((0, 2), (1, 3))
@@ -92,12 +97,7 @@ def test_windows_near_the_rough_limit_count_less(rough_loaded_run):
     from suvtwin.errors import InputError
     from suvtwin.estimators.monitor import MonitorConfig
 
-    table, loads = rough_loaded_run
-    t = table["t_s"].to_numpy()
-    v = table["speed_mps"].to_numpy()
-    acc_s = table[[f"{c}_accel_sprung_mps2" for c in CORNERS]].to_numpy()
-    acc_u = table[[f"{c}_accel_unsprung_mps2" for c in CORNERS]].to_numpy()
-    truth = table[[f"{c}_pressure_kpa" for c in CORNERS]].to_numpy()[-1]
+    t, v, acc_s, acc_u, truth, loads = _signals(rough_loaded_run)
     full = MonitorConfig(nonlinear_taper_from=MonitorConfig().max_nonlinear_share)
     _, tapered = monitor_signals(t, v, acc_s, acc_u, loads=loads, preview=False)
     _, untapered = monitor_signals(t, v, acc_s, acc_u, loads=loads, preview=False, config=full)
