@@ -1339,9 +1339,13 @@ class TyreMonitor:
             if (cond.mean_kpa - means[r]) ** 2 > self.config.preview_gate**2 * (cond.sigma_kpa**2 + vars_[r]):
                 self._state.counts["preview_rejected"][r] += 1
                 continue
-            mean, cov = fuse_track(p_f, math.sqrt(vars_[f]), means[r], math.sqrt(vars_[r]), cond,
-                                   correlation=self.config.preview_correlation)  # fmt: skip
-            if vars_[r] <= limit:
+            # a rear at its prior shares no road with the front's estimate: no correlation, and
+            # nothing for the front to learn from it
+            rear_observable = bool(vars_[r] <= limit)
+            rho = self.config.preview_correlation if rear_observable else 0.0
+            sf, sr = math.sqrt(vars_[f]), math.sqrt(vars_[r])
+            mean, cov = fuse_track(p_f, sf, means[r], sr, cond, correlation=rho)
+            if rear_observable:
                 means[f], vars_[f] = mean[0], cov[0, 0]
             means[r], vars_[r] = mean[1], cov[1, 1]
         return means, vars_
