@@ -222,15 +222,20 @@ def corner_static_travel(corner: str, loads=(), *, vehicle: VehicleParams | None
     force beyond its preload (:func:`suvtwin.suspension_law.static_travel`). `vehicle`: default
     the SUV's parameter file (:func:`run_vehicle` gives a run's)."""
     vehicle = vehicle or load_vehicle()
+    force = sum(_wheel_load(vehicle, corner, mass * GRAVITY, x, y) for mass, (x, y, _) in loads)
+    law = SuspensionLaw.of(vehicle.suspension, spring_rate=float(vehicle.spring_rate[CORNERS.index(corner)]))
+    return float(suspension_law.static_travel(law, force))
+
+
+def _wheel_load(vehicle: VehicleParams, corner: str, weight_n: float, x: float, y: float) -> float:
+    """The part of a weight (N) at (x, y) m from the chassis CoG (x forward, y left) that `corner`'s
+    wheel carries, N: to the axles by the lever arms about them (a1, a2), to an axle's wheels by
+    the lateral offset over its track."""
     chassis = vehicle.chassis
     front, left = corner.startswith("f"), corner.endswith("l")
     track = chassis.track_front if front else chassis.track_rear
-    force = 0.0
-    for mass, (x, y, _) in loads:
-        axle = (chassis.a2 + x) / vehicle.wheelbase if front else (chassis.a1 - x) / vehicle.wheelbase
-        force += mass * GRAVITY * axle * (0.5 + (y if left else -y) / track)
-    law = SuspensionLaw.of(vehicle.suspension, spring_rate=float(vehicle.spring_rate[CORNERS.index(corner)]))
-    return float(suspension_law.static_travel(law, force))
+    axle = (chassis.a2 + x) / vehicle.wheelbase if front else (chassis.a1 - x) / vehicle.wheelbase
+    return weight_n * axle * (0.5 + (y if left else -y) / track)
 
 
 def corner_sprung_mass(corner: str, load_kg: float = 0.0, *, vehicle: VehicleParams | None = None) -> float:
@@ -355,14 +360,12 @@ def _lateral_parameters(vehicle: VehicleParams, tire, loads, masses, rel, own, c
     """:func:`full_car_model`'s lateral-slip fields (its docstring): masses (kg), positions
     relative to the combined centre of gravity (m) and own inertias of the chassis and the loads."""
     c = vehicle.chassis
-    loads_z = np.zeros(4)  # static wheel loads, N: the chassis's and the loads' weight by lever arms
-    for mass, (x, y, _) in ((c.mass, (0.0, 0.0, 0.0)), *loads):
-        for i, corner in enumerate(CORNERS):
-            front, left = corner.startswith("f"), corner.endswith("l")
-            track = c.track_front if front else c.track_rear
-            axle = (c.a2 + x) / vehicle.wheelbase if front else (c.a1 - x) / vehicle.wheelbase
-            loads_z[i] += mass * GRAVITY * axle * (0.5 + (y if left else -y) / track)
-    loads_z += np.asarray(vehicle.unsprung_mass, dtype=float) * GRAVITY
+    # static wheel loads, N: the chassis's and the loads' weight by lever arms, and the wheels'
+    weights = ((c.mass, (0.0, 0.0, 0.0)), *loads)
+    loads_z = np.array([
+        sum(_wheel_load(vehicle, corner, mass * GRAVITY, x, y) for mass, (x, y, _) in weights)
+        for corner in CORNERS
+    ]) + np.asarray(vehicle.unsprung_mass, dtype=float) * GRAVITY  # fmt: skip
     slip = 1e-5  # rad: the MF curve is linear there
     _, fy = tire_forces_array(loads_z, 0.0, slip, tire.nominal_pressure, tire)
     cornering = np.abs(fy) / slip
