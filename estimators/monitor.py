@@ -583,7 +583,7 @@ class TyreMonitor:
     names : sequence of str, optional
         Corner names for messages (default ``c0, c1, …``).
     tracks : sequence of (int, int), optional
-        (front, rear) column pairs of corners on one track: the rear's estimate is fused with the
+        (front, rear) column pairs of corners on one track: the two estimates are fused through the
         front→rear preview (:mod:`suvtwin.estimators.preview`). Needs `wheelbase_m`.
     wheelbase_m : float, optional
         Distance from the front to the rear axle, m.

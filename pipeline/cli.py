@@ -528,7 +528,7 @@ def monitor_command(
         str, typer.Option(help="Tyres to monitor, comma-separated among fl, fr, rl, rr.")
     ] = "fl,fr,rl,rr",
     preview: Annotated[
-        bool, typer.Option("--preview/--no-preview", help="Fuse each rear tyre with its track's "
+        bool, typer.Option("--preview/--no-preview", help="Fuse each track's two tyres through its "
                            "front→rear preview where the two wheels are coherent (--no-preview: each "
                            "tyre on its own).")
     ] = True,
