@@ -1045,12 +1045,11 @@ class TyreMonitor:
             table = np.arange(n_c)[:, None]  # each corner's gain tables at this window's travel
             table[used, 0], rough, rate_c, touch_c = self._tables_for(np.flatnonzero(used), spec[used, 0])
             analysed_rate[used], analysed_touch[used] = rate_c, touch_c
-            rough_c = np.zeros(n_c, dtype=bool)
-            rough_c[used] = rough > cfg.max_nonlinear_share
+            share_c = np.zeros(n_c)  # time on a stop or off the ground, per corner (0 where unused)
+            share_c[used] = rough
+            rough_c = share_c > cfg.max_nonlinear_share
             # toward the limit the linearized model's error grows: the window's likelihood is
             # tempered, its weight falling linearly to 0 from nonlinear_taper_from to the limit
-            share_c = np.zeros(n_c)
-            share_c[used] = rough
             span = cfg.max_nonlinear_share - cfg.nonlinear_taper_from
             if span > 0:
                 w_c = w_c * np.clip((cfg.max_nonlinear_share - share_c) / span, 0.0, 1.0)

@@ -371,8 +371,8 @@ def _lateral_parameters(vehicle: VehicleParams, tire, loads, masses, rel, own, c
     cornering = np.abs(fy) / slip
     cornering[:2] /= 1.0 + cornering[:2] * vehicle.steering.compliance_steer_front
     deflection = float(np.mean(loads_z)) / float(tire.vertical_stiffness_nominal)
-    yaw = c.inertia_yaw_total + float(own[1:].sum()) + float(masses[1:] @ (rel[1:, 0] ** 2 + rel[1:, 1] ** 2))
-    yaw += c.mass * float(rel[0, 0] ** 2 + rel[0, 1] ** 2)
+    # parallel axes as for pitch and roll: the chassis's own mass too, its CoG moved by the loads
+    yaw = c.inertia_yaw_total + own.sum() + float(masses @ (rel[:, 0] ** 2 + rel[:, 1] ** 2))
     return {
         "cornering_stiffness": tuple(float(k) for k in cornering),
         "cog_height": float(c.cog_height + cog[2]),
