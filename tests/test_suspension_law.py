@@ -16,6 +16,8 @@ from suvtwin.suspension_law import (
     SuspensionLaw,
     damper_even_slope,
     damper_force,
+    damper_hermite,
+    damper_residual_psd,
     equivalent_spring_rate,
     gaussian_damper_force,
     gaussian_spring_force,
@@ -171,3 +173,58 @@ def test_rectified_psd_against_a_simulated_gaussian_process():
     measured = np.array([pa[k - 20 : k + 20].mean() for k in at])
     np.testing.assert_allclose(predicted, measured, rtol=0.1)
     assert predicted[4] > 2 * predicted[2]  # twice the 12 Hz peak: rectification's harmonic
+
+
+def test_damper_hermite_coefficients_against_their_closed_forms():
+    law = LAWS[0]
+    rng = np.random.default_rng(3)
+    for sigma in (0.05, 0.13, 0.4):
+        coef, power = damper_hermite(law, sigma)
+        # b1/σ = E[F'(v)] (Stein): the slopes weighted by the normal's mass in each piece
+        knee = law.knee_velocity / sigma
+        inner = 0.5 * math.erf(knee / math.sqrt(2.0))
+        outer = 0.5 - inner
+        slope = (inner * (law.compression_low + law.rebound_low)
+                 + outer * (law.compression_high + law.rebound_high))  # fmt: skip
+        assert coef[1] / sigma == pytest.approx(slope, rel=1e-4)
+        # b0 = E[F] (the jacking force), and the orders sum towards E[F²]
+        assert coef[0] == pytest.approx(float(gaussian_damper_force(law, sigma)), rel=1e-4)
+        v = rng.normal(0.0, sigma, 2_000_000)
+        assert power == pytest.approx(float(np.mean(damper_force(v, law) ** 2)), rel=0.01)
+        assert np.sum(coef**2) <= power * (1 + 1e-9)
+        assert np.sum(coef**2) > 0.995 * power  # the rest: orders above 40 (a kink)
+    linear = SuspensionLaw(spring_rate=4e4, compression_low=2000.0, rebound_low=2000.0,
+                           compression_high=2000.0, rebound_high=2000.0)  # fmt: skip
+    coef, power = damper_hermite(linear, 0.2)
+    assert coef[1] == pytest.approx(400.0, rel=1e-6)
+    assert np.abs(np.delete(coef, 1)).max() < 1e-6 * 400.0
+
+
+def test_damper_residual_psd_against_a_simulated_gaussian_process():
+    # the residual F(v) − E[F] − c_eq v of the SUV's damper at a body-and-hop velocity process,
+    # its Welch PSD against the formula from v's; a linear damper leaves nothing
+    rng = np.random.default_rng(4)
+    fs, n = 400.0, 2**20
+    f = np.fft.rfftfreq(n, 1 / fs)
+    shape = np.exp(-0.5 * ((f - 11.0) / 2.5) ** 2) + 0.5 * np.exp(-0.5 * ((f - 1.5) / 0.4) ** 2)
+    v = np.fft.irfft((rng.normal(size=f.size) + 1j * rng.normal(size=f.size)) * np.sqrt(shape), n=n)
+    v *= 0.15 / v.std()  # around the knee (0.13 m/s)
+    from scipy.signal import welch
+
+    law = LAWS[0]
+    coef, _ = damper_hermite(law, v.std())
+    residual = damper_force(v, law) - coef[0] - coef[1] * v / v.std()
+    fw, pv = welch(v, fs=fs, nperseg=8192)
+    _, pr = welch(residual, fs=fs, nperseg=8192)
+    at = np.searchsorted(fw, [2.0, 5.0, 11.0, 22.0, 35.0])
+    predicted = damper_residual_psd(law, fw[1:], pv[1:], np.full(fw.size - 1, fw[1]), fw[at], max_lag_s=4.0)
+    measured = np.array([pr[k - 20 : k + 20].mean() for k in at])
+    np.testing.assert_allclose(predicted, measured, rtol=0.1)
+    # the even part alone (rectified) is less than the whole residual: the knee's odd part adds
+    bins = np.full(fw.size - 1, fw[1])
+    even = damper_even_slope(law, v.std()) ** 2 * rectified_psd(fw[1:], pv[1:], bins, fw[at])
+    assert np.all(predicted > even)
+    linear = SuspensionLaw(spring_rate=4e4, compression_low=2000.0, rebound_low=2000.0,
+                           compression_high=2000.0, rebound_high=2000.0)  # fmt: skip
+    zero = damper_residual_psd(linear, fw[1:], pv[1:], np.full(fw.size - 1, fw[1]), fw[at])
+    assert np.abs(zero).max() < 1e-9 * measured.max()
