@@ -88,6 +88,7 @@ __all__ = [
     "corner_spectrum",
     "gain_at_delay",
     "projected_terms",
+    "suspension_force_responses",
     "track_responses",
     "wheel_responses",
 ]
@@ -268,6 +269,29 @@ def wheel_responses(
     road[:, :, corner] += delta  # the grid's own tyre rate
     out = per_force * road[:, :, None, :]  # displacement per unit road elevation under each wheel
     return out * s[None, :, None, None]  # acceleration s² X per road velocity s R
+
+
+def suspension_force_responses(
+    f: npt.ArrayLike, car: FullCar, corner: int, *, speed_mps: float | None = None
+) -> np.ndarray:
+    """Corner `corner`'s (body, wheel) acceleration per unit force pair in its suspension: 1 N up
+    on the body point above the corner and 1 N down on its wheel (a force the linear suspension
+    does not hold, e.g. what a damper's statistical linearization leaves), all tyres in contact
+    with the car's stiffness and damping. `f` (F,) Hz; `speed_mps`: with the tyres' lateral slip at
+    that speed (None: without). Returns complex (F, 2), (m/s²)/N."""
+    f = np.atleast_1d(np.asarray(f, dtype=float))
+    s = 2j * np.pi * f
+    springs, dampers = np.asarray(car.spring_rate, float), np.asarray(car.damping, float)
+    jac, stiff, damp, mass = _body_matrices(car, springs, dampers)
+    dyn = _dynamic_stiffness(car, s, stiff, damp, mass, speed_mps)
+    idx = 3 + np.arange(4)
+    tyres = np.asarray(car.tire_stiffness, float)[None, :] + s[:, None] * np.asarray(car.tire_damping, float)
+    dyn[:, idx, idx] += tyres
+    force = np.zeros((f.size, dyn.shape[-1]), dtype=complex)
+    force[:, :3] = jac[corner]  # generalized force of 1 N up at the body point
+    force[:, 3 + corner] = -1.0
+    x = np.linalg.solve(dyn, force[..., None])[..., 0]
+    return (s**2)[:, None] * np.stack([x[:, :3] @ jac[corner], x[:, 3 + corner]], axis=1)
 
 
 def projected_terms(h: np.ndarray, u1: np.ndarray, u2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -13,6 +13,7 @@ from suvtwin.estimators.full_car import (
     corner_spectrum,
     gain_at_delay,
     projected_terms,
+    suspension_force_responses,
     track_responses,
     wheel_responses,
 )
@@ -69,6 +70,31 @@ def test_front_axle_is_a_quarter_car_when_the_body_decouples():
     hs, hu = corner_response(f, car.tire_stiffness[0], qc)
     np.testing.assert_allclose(front_pair[:, 0], hs, rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(front_pair[:, 1], hu, rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize("corner", range(4))
+def test_a_suspension_force_pair_meets_the_mass_line_and_the_static_limit(corner):
+    # far above every mode the masses alone answer: the body point by the rigid body's
+    # 1/m + x²/I_pitch + y²/I_roll, the wheel by −1/m_us; far below, the static deflection's
+    # acceleration −ω² x_static, x_static from the stiffness alone (tyres as springs)
+    x, y = CAR.corner_xy[corner]
+    rigid = 1 / CAR.sprung_mass + x**2 / CAR.inertia_pitch + y**2 / CAR.inertia_roll
+    high = suspension_force_responses([5e4], CAR, corner)[0]
+    assert high[0].real == pytest.approx(rigid, rel=1e-3)
+    assert high[1].real == pytest.approx(-1 / CAR.unsprung_mass[corner], rel=1e-3)
+    stiff_only = replace(CAR, damping=(0.0,) * 4, tire_damping=(0.0,) * 4)
+    f = 1e-3
+    low = suspension_force_responses([f], stiff_only, corner)[0] / -(2 * np.pi * f) ** 2  # static, m/N
+    # static: the pair compresses this corner's suspension by 1/(its wheel rate and bar, against
+    # the tyre and the rest of the car in series); the body point rises and the wheel sinks
+    assert low[0].real > 0 > low[1].real
+    assert low[0].real - low[1].real < 1 / CAR.spring_rate[corner]
+    # the wheel sinks into its tyre by the force over k_t, less what the body's rise loads back
+    assert -low[1].real < 1 / CAR.tire_stiffness[corner]
+    # with the lateral slip, the vertical limits stay
+    lateral = full_car_model(VEHICLE, lateral=True)
+    high_lat = suspension_force_responses([5e4], lateral, corner, speed_mps=20.0)[0]
+    assert high_lat[1].real == pytest.approx(high[1].real, rel=1e-3)
 
 
 def test_the_tyre_grid_by_rank_one_updates_equals_a_direct_solve():
