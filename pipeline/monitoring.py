@@ -22,7 +22,7 @@ import pandas as pd
 
 from suvtwin.errors import InputError
 from suvtwin.estimators.deflation import DeflationRule, deflation_warnings
-from suvtwin.estimators.monitor import SKIP_REASONS, MonitorConfig, MonitorUpdate, TyreMonitor
+from suvtwin.estimators.monitor import SKIP_REASONS, TAIL_LEVELS, MonitorConfig, MonitorUpdate, TyreMonitor
 from suvtwin.files import atomic_write, read_parquet_table
 from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
 from suvtwin.pipeline.estimation import (
@@ -146,7 +146,8 @@ def monitor_run(
     The warning's reference is `placard_kpa` (the same for every tyre) if given, else what the
     monitor learns after a driver reset at `reset_at_s` (default the run's start). The table has
     one row per update: ``t_s``, ``speed_mps``, per corner ``{c}_pressure_hat_kpa``,
-    ``{c}_pressure_sigma_kpa``, ``{c}_observable``, ``{c}_status`` (what became of the segment:
+    ``{c}_pressure_sigma_kpa``, ``{c}_pressure_lower_kpa`` and ``{c}_pressure_upper_kpa`` (the 5 % and
+    95 % quantiles), ``{c}_observable``, ``{c}_status`` (what became of the segment:
     ``used`` or why skipped), ``{c}_reference_kpa``, ``{c}_loss_probability``, ``{c}_warning``
     (latched), ``{c}_spring_rate_npm`` and ``{c}_tyre_contact`` (the suspension rate and tyre contact
     share the window was analysed with: :class:`~suvtwin.estimators.monitor.MonitorUpdate`), and the
@@ -187,11 +188,14 @@ def monitor_run(
         update.t_s, update.pressure_pa / 1e3, update.pressure_sigma_pa / 1e3, update.observable,
         update.speed_mps,
         placard_kpa=placard_kpa, reset_at_s=t[0] if reset_at_s is None else reset_at_s, rule=rule,
+        upper_kpa=update.pressure_upper_pa / 1e3, upper_level=TAIL_LEVELS[1],
     )  # fmt: skip
     columns: dict[str, np.ndarray] = {"t_s": update.t_s, "speed_mps": update.speed_mps}
     for i, c in enumerate(corners):
         columns[f"{c}_pressure_hat_kpa"] = update.pressure_pa[:, i] / 1e3
         columns[f"{c}_pressure_sigma_kpa"] = update.pressure_sigma_pa[:, i] / 1e3
+        columns[f"{c}_pressure_lower_kpa"] = update.pressure_lower_pa[:, i] / 1e3
+        columns[f"{c}_pressure_upper_kpa"] = update.pressure_upper_pa[:, i] / 1e3
         columns[f"{c}_observable"] = update.observable[:, i]
         columns[f"{c}_status"] = np.array(SKIP_REASONS)[update.status[:, i]]
         columns[f"{c}_reference_kpa"] = warn.reference_kpa[:, i]

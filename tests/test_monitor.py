@@ -181,6 +181,28 @@ def test_the_grid_filter_is_the_kalman_filter_on_a_gaussian_random_walk():
         fit = mon._moments()
         assert abs(fit.p_mean[0] - mean) < 0.05
         assert abs(fit.p_var[0] - (var + 1.0 / 12.0)) < 0.01 * var  # + the 1 kPa grid's Sheppard term
+        # a Gaussian posterior: its 5 % and 95 % quantiles are the mean ∓ 1.645 σ
+        np.testing.assert_allclose(fit.p_tails[0], mean + np.array([-1.0, 1.0]) * 1.6448536 * np.sqrt(var),
+                                   atol=0.15)  # fmt: skip
+
+
+def test_the_changing_regimes_skirt_leaves_a_core_narrower_than_sigma():
+    # the default filter, fed the same Gaussian window likelihood (200 ± 8 kPa) for a minute: the
+    # changing regime spreads a share of the mass at every prediction, so σ covers a skirt and the
+    # 95 % quantile sits closer to the mean than 1.645 σ; without changes the two agree
+    shape_of = lambda mon: (1, mon.config.damping_points, mon.waviness_grid.size, mon._p_coarse.size)  # noqa: E731
+    width = {}
+    for name, every in (("default", MonitorConfig().change_every_s), ("no changes", 1e7)):
+        mon = TyreMonitor([QC], dt=DT, config=MonitorConfig(change_every_s=every))
+        ll = np.broadcast_to(-0.5 * (mon._p_coarse - 200.0) ** 2 / 8.0**2, shape_of(mon)).copy()
+        for _ in range(15):
+            mon._predict(4.0)
+            mon._correct(ll, np.array([0.5]), np.array([True]))
+        fit = mon._moments()
+        sigma = float(np.sqrt(fit.p_var[0]))
+        width[name] = (fit.p_tails[0, 1] - fit.p_mean[0]) / sigma, (fit.p_mean[0] - fit.p_tails[0, 0]) / sigma
+    assert width["no changes"] == pytest.approx((1.645, 1.645), abs=0.03)
+    assert max(width["default"]) < 1.6
 
 
 def test_the_regime_chain_is_the_two_state_markov_process():
@@ -226,6 +248,28 @@ def test_no_warning_at_nominal_pressure_or_when_not_observable():
     t, p, s, obs = _rows([150.0] * 20, 30.0)
     w = deflation_warnings(t, p, s, np.zeros_like(obs), placard_kpa=230.0)
     assert not np.any(w.warning)
+
+
+def test_warning_from_the_posteriors_upper_tail():
+    # a posterior at 190 kPa with σ 8 but its 95 % quantile at 199 (a narrow core and a skirt):
+    # against the 201.25 kPa threshold, σ alone gives Φ(11.25/8) = 0.920 (no warning), the tail
+    # (199 − 190)/1.645 = 5.47 gives Φ(11.25/5.47) = 0.980
+    t, p, s, obs = _rows([190.0] * 5, 8.0)
+    upper = np.full(p.shape, 199.0)
+    by_sigma = deflation_warnings(t, p, s, obs, placard_kpa=230.0)
+    by_tail = deflation_warnings(t, p, s, obs, placard_kpa=230.0, upper_kpa=upper)
+    assert by_sigma.probability[0, 0] == pytest.approx(0.9203, abs=1e-3)
+    assert not np.any(by_sigma.warning)
+    assert by_tail.probability[0, 0] == pytest.approx(0.9801, abs=1e-3)
+    assert by_tail.warning_time_s[0] == t[1]
+    # exact at the decision: the quantile at the threshold gives the rule's probability
+    at = deflation_warnings(t, p, s, obs, placard_kpa=230.0, upper_kpa=np.full(p.shape, 0.875 * 230.0))
+    assert at.probability[0, 0] == pytest.approx(0.95, abs=1e-9)
+    # a degenerate tail (at or below the estimate) falls back to σ
+    flat = deflation_warnings(t, p, s, obs, placard_kpa=230.0, upper_kpa=p.copy())
+    np.testing.assert_allclose(flat.probability, by_sigma.probability)
+    with pytest.raises(ValueError, match="upper_level"):
+        deflation_warnings(t, p, s, obs, placard_kpa=230.0, upper_kpa=upper, upper_level=0.4)
 
 
 def test_learned_reference_after_reset():

@@ -28,9 +28,14 @@ def test_monitor_writes_every_tyre_and_warns_against_a_placard(run_file, tmp_pat
     assert len(frame) == 5  # one update every 4 s
     np.testing.assert_allclose(frame["t_s"], np.arange(1, 6) * 4.0 - 1e-3)
     for c in ("fl", "fr", "rl", "rr"):
-        for col in ("pressure_hat_kpa", "pressure_sigma_kpa", "observable", "status", "reference_kpa",
-                    "loss_probability", "warning"):  # fmt: skip
+        for col in ("pressure_hat_kpa", "pressure_sigma_kpa", "pressure_lower_kpa", "pressure_upper_kpa",
+                    "observable", "status", "reference_kpa", "loss_probability", "warning"):  # fmt: skip
             assert f"{c}_{col}" in frame
+        # the 90 % interval holds the estimate, and is no wider than ±1.645 σ by much (a skirt narrows
+        # the core; the grid's bounds can skew it)
+        lower, hat, upper = (frame[f"{c}_pressure_{k}_kpa"] for k in ("lower", "hat", "upper"))
+        assert (lower < hat).all() and (hat < upper).all()
+        assert ((upper - lower) < 2 * 1.7 * frame[f"{c}_pressure_sigma_kpa"]).all()
         assert (frame[f"{c}_reference_kpa"] == 250.0).all()
     meta = json.loads(table.schema.metadata[b"suvtwin.monitor"])
     assert meta["placard_kpa"] == 250.0 and meta["segments"] == 5
