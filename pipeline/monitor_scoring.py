@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from suvtwin.errors import InputError
+from suvtwin.estimators.deflation import DeflationRule
 from suvtwin.mjcf.vehicle import CORNERS
 
 __all__ = [
@@ -51,7 +52,8 @@ class MonitorTrace:
     ----------
     t_s : (T,) run time axis; truth_kpa : (T, 4) true pressures; speed_mps : (T,) vehicle speed.
     t_est : (K,) monitor update times; p_hat, sigma : (K, 4) estimate and its 1σ;
-    observable, warning : (K, 4) bool flags (warning latched or not).
+    observable, warning : (K, 4) bool flags (warning latched or not);
+    loss_probability : (K, 4) or None, the warning's probability of a loss at each update.
     """
 
     t_s: np.ndarray
@@ -62,11 +64,15 @@ class MonitorTrace:
     sigma: np.ndarray
     observable: np.ndarray
     warning: np.ndarray
+    loss_probability: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         T, K = np.shape(self.t_s)[0], np.shape(self.t_est)[0]
         for name, shape in (("truth_kpa", (T, 4)), ("speed_mps", (T,)), ("p_hat", (K, 4)),
-                            ("sigma", (K, 4)), ("observable", (K, 4)), ("warning", (K, 4))):  # fmt: skip
+                            ("sigma", (K, 4)), ("observable", (K, 4)), ("warning", (K, 4)),
+                            ("loss_probability", (K, 4))):  # fmt: skip
+            if getattr(self, name) is None:
+                continue
             got = np.shape(getattr(self, name))
             if got != shape:
                 raise InputError(f"MonitorTrace.{name} must have shape {shape}, got {got}")
@@ -92,7 +98,8 @@ class MonitorTrace:
 def monitor_trace(run: Mapping, monitor: Mapping) -> MonitorTrace:
     """A :class:`MonitorTrace` from a run's table (``t_s``, ``speed_mps``, ``{c}_pressure_kpa``) and a
     monitor's table (``t_s``, ``{c}_pressure_hat_kpa``, ``{c}_pressure_sigma_kpa``,
-    ``{c}_observable``, ``{c}_warning``): DataFrames or mappings of arrays."""
+    ``{c}_observable``, ``{c}_warning``; ``{c}_loss_probability`` if there): DataFrames or mappings
+    of arrays."""
 
     def col(table: Mapping, name: str, what: str) -> np.ndarray:
         try:
@@ -112,6 +119,11 @@ def monitor_trace(run: Mapping, monitor: Mapping) -> MonitorTrace:
         sigma=per_tyre(monitor, "pressure_sigma_kpa", "monitor"),
         observable=per_tyre(monitor, "observable", "monitor", bool),
         warning=per_tyre(monitor, "warning", "monitor", bool),
+        loss_probability=(
+            per_tyre(monitor, "loss_probability", "monitor")
+            if all(f"{c}_loss_probability" in monitor for c in CORNERS)
+            else None
+        ),
     )
 
 
@@ -305,16 +317,29 @@ def _rising_edges(warning: np.ndarray) -> np.ndarray:
 
 
 def warning_detection(
-    traces: Sequence[MonitorTrace], deflated: Sequence[Sequence[str]], *, window_s: float = 60.0
+    traces: Sequence[MonitorTrace],
+    deflated: Sequence[Sequence[str]],
+    *,
+    window_s: float = 60.0,
+    names: Sequence[str] | None = None,
+    classes: Sequence[str | None] | None = None,
+    probability: float = DeflationRule().probability,
 ) -> dict:
     """Deflation warnings on runs whose tyres `deflated[i]` are low from the start: a run is
     detected when every deflated tyre warns within `window_s` of driving (:func:`driving_time`).
     Reported overall and for one-tyre and all-four runs, with the driving time to the last needed
-    warning (median, max over detected runs) and warnings on tyres that are not deflated."""
+    warning (median, max over detected runs) and warnings on tyres that are not deflated; by road
+    class when `classes` are given; and each missed run (``missed``: run index or `names[i]`, class,
+    and per deflated tyre not warned in time its share of observable updates within the window, its
+    highest loss probability there (when the trace has it), and its estimate − truth and σ at the
+    window's last update, kPa), with the misses counted by cause (``missed_causes``:
+    ``never_observable``, a tyre with no observable update; ``probability_reached_once``, every
+    such tyre reached `probability` (the warning rule's) but did not hold it long enough;
+    ``probability_below``, the others)."""
     if len(traces) != len(deflated):
         raise InputError(f"warning_detection: {len(traces)} traces but {len(deflated)} deflated lists")
-    hit, kind, delay, wrong = [], [], [], 0
-    for tr, low in zip(traces, deflated, strict=True):
+    hit, kind, delay, wrong, missed = [], [], [], 0, []
+    for r, (tr, low) in enumerate(zip(traces, deflated, strict=True)):
         times = warning_times(tr.t_est, tr.warning)
         idx = [CORNERS.index(c) for c in low]
         needed = times[idx]
@@ -327,6 +352,10 @@ def warning_detection(
         delay.append(d)
         kind.append("all_four" if len(idx) == 4 else "one_tyre")
         wrong += int(np.sum(np.isfinite(np.delete(times, idx))))
+        if not ok:
+            missed.append(_missed_run(tr, idx, times, window_s, probability,
+                                      names[r] if names is not None else r,
+                                      classes[r] if classes is not None else None))  # fmt: skip
     hit_a, kind_a, delay_a = np.array(hit), np.array(kind), np.array(delay)
     out = {"window_s": window_s, "runs": len(hit), "detected": float(hit_a.mean()) if hit else None}
     for name in ("one_tyre", "all_four"):
@@ -336,7 +365,51 @@ def warning_detection(
     out["time_to_warn_s_median"] = float(np.median(found)) if found.size else None
     out["time_to_warn_s_max"] = float(found.max()) if found.size else None
     out["warnings_on_inflated_tyres"] = wrong
+    if classes is not None:
+        cls = np.array([str(c) for c in classes])
+        out["by_class"] = {
+            c: {"runs": int(np.sum(cls == c)), "detected": float(hit_a[cls == c].mean())}
+            for c in sorted(set(cls))
+        }
+    causes = [m["cause"] for m in missed]
+    out["missed_causes"] = {c: causes.count(c) for c in _MISS_CAUSES}
+    out["missed"] = missed
     return out
+
+
+_MISS_CAUSES = ("never_observable", "probability_reached_once", "probability_below")
+
+
+def _missed_run(
+    tr: MonitorTrace, idx: list[int], times: np.ndarray, window_s: float, probability: float, name, road_class
+) -> dict:
+    """What a run's deflated tyres that did not warn within `window_s` of driving showed over that
+    window (see :func:`warning_detection`)."""
+    driven = np.array([driving_time(tr.t_s, tr.speed_mps, float(t)) for t in tr.t_est])
+    inside = driven <= window_s
+    last = int(np.flatnonzero(inside)[-1]) if inside.any() else len(tr.t_est) - 1
+    truth = tr.truth_at_est
+    tyres = {}
+    for i in idx:
+        warned = np.isfinite(times[i]) and driving_time(tr.t_s, tr.speed_mps, float(times[i])) <= window_s
+        if warned:
+            continue
+        item = {
+            "observable_share": float(tr.observable[inside, i].mean()) if inside.any() else 0.0,
+            "estimate_minus_truth_kpa": float(tr.p_hat[last, i] - truth[last, i]),
+            "sigma_kpa": float(tr.sigma[last, i]),
+        }
+        if tr.loss_probability is not None:
+            prob = tr.loss_probability[inside, i]
+            item["max_probability"] = float(np.nanmax(prob)) if np.any(np.isfinite(prob)) else None
+        tyres[CORNERS[i]] = item
+    if any(t["observable_share"] == 0.0 for t in tyres.values()):
+        cause = "never_observable"
+    elif tyres and all((t.get("max_probability") or 0.0) >= probability for t in tyres.values()):
+        cause = "probability_reached_once"
+    else:
+        cause = "probability_below"
+    return {"run": name, "road_class": road_class, "cause": cause, "tyres": tyres}
 
 
 def false_warnings(traces: Sequence[MonitorTrace], names: Sequence[str] | None = None) -> dict:
@@ -405,7 +478,13 @@ def score_set(
     elif set_name == "low_speed":
         out["low_speed"] = low_speed_shares(traces, tol_kpa=tol_kpa)
     elif set_name == "warning":
-        out["warning"] = warning_detection(traces, [i["deflated"] for i in infos], window_s=60.0)
+        out["warning"] = warning_detection(
+            traces,
+            [i["deflated"] for i in infos],
+            window_s=60.0,
+            names=[str(i.get("name", k)) for k, i in enumerate(infos)],
+            classes=classes if all(isinstance(c, str) for c in classes) else None,
+        )
     elif set_name == "nominal_long":
         weave = np.array([bool(i.get("weave")) for i in infos])
         names = [str(i.get("name", k)) for k, i in enumerate(infos)]

@@ -4,6 +4,7 @@ arrays whose answers are worked out by hand in each test."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -155,6 +156,55 @@ def test_warning_detection_within_a_window_of_driving():
     assert out["time_to_warn_s_median"] == pytest.approx(30.0)
     assert out["warnings_on_inflated_tyres"] == 1  # run 3 warns fl, deflated is fr
     assert warning_detection(runs[:1], [["fl"]], window_s=20.0)["detected"] == 0.0
+
+
+def test_warning_detection_explains_each_miss():
+    """Each missed run names its cause from what its unwarned low tyres showed within the window of
+    driving only (a probability reached after 60 s of driving does not count)."""
+    t_s = np.arange(0.0, 80.0, 0.1)
+    t_est = np.arange(0.0, 80.0, 4.0)
+    K = t_est.size
+
+    def prob(peak_at=None, peak=0.97, late=None):
+        p = np.full((K, 4), 0.2)
+        if peak_at is not None:
+            p[peak_at, 0] = peak
+        if late is not None:
+            p[t_est > 60.0, 0] = late
+        return p
+
+    warned = np.zeros((K, 4), bool)
+    warned[5:, 0] = True
+    unobservable = np.ones((K, 4), bool)
+    unobservable[:, 0] = False
+    runs = [
+        _trace(t_s, 180.0, t_est, 185.0, warning=warned),  # detected
+        _trace(t_s, 180.0, t_est, 240.0, sigma=80.0, observable=unobservable),
+        _trace(t_s, 180.0, t_est, 190.0, sigma=9.0),
+        _trace(t_s, 180.0, t_est, 196.0, sigma=12.0),
+    ]
+    probabilities = [prob(), prob(), prob(peak_at=7), prob(late=0.99)]
+    runs = [replace(r, loss_probability=p) for r, p in zip(runs, probabilities, strict=True)]
+    out = warning_detection(runs, [["fl"]] * 4, window_s=60.0, names=["a", "b", "c", "d"],
+                            classes=["A", "D", "B", "B"])  # fmt: skip
+    assert out["detected"] == pytest.approx(0.25)
+    assert out["by_class"] == {"A": {"runs": 1, "detected": 1.0}, "B": {"runs": 2, "detected": 0.0},
+                               "D": {"runs": 1, "detected": 0.0}}  # fmt: skip
+    causes = {"never_observable": 1, "probability_reached_once": 1, "probability_below": 1}
+    assert out["missed_causes"] == causes
+    missed = {m["run"]: m for m in out["missed"]}
+    assert set(missed) == {"b", "c", "d"}
+    assert missed["b"]["cause"] == "never_observable" and missed["b"]["road_class"] == "D"
+    assert missed["b"]["tyres"]["fl"]["observable_share"] == 0.0
+    assert missed["c"]["cause"] == "probability_reached_once"
+    assert missed["c"]["tyres"]["fl"]["max_probability"] == pytest.approx(0.97)
+    d = missed["d"]["tyres"]["fl"]
+    assert missed["d"]["cause"] == "probability_below" and d["max_probability"] == pytest.approx(0.2)
+    assert d["estimate_minus_truth_kpa"] == pytest.approx(16.0) and d["sigma_kpa"] == pytest.approx(12.0)
+    # without probabilities a miss of an observable tyre is counted below
+    plain = warning_detection([replace(runs[2], loss_probability=None)], [["fl"]], window_s=60.0)
+    assert plain["missed_causes"]["probability_below"] == 1
+    assert "max_probability" not in plain["missed"][0]["tyres"]["fl"]
 
 
 def test_false_warnings_count_onsets_per_simulated_minute():

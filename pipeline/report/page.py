@@ -218,6 +218,13 @@ def _monitor_html(monitor: dict) -> list[str]:
             share = w.get("detected")
             parts.append(" Runs whose deflated tyres were all warned within 60 s of driving: "
                          + ("—" if share is None else f"{100 * share:.0f} %") + ".")  # fmt: skip
+            causes = w.get("missed_causes")
+            if causes and sum(causes.values()):
+                parts.append(
+                    f" Missed: {causes.get('never_observable', 0)} with a low tyre never observable,"
+                    f" {causes.get('probability_reached_once', 0)} whose low tyres reached the warning's"
+                    f" probability but did not hold it, {causes.get('probability_below', 0)} below it."
+                )
         parts.append("</p>")
         failed = {**study.get("simulation_failed", {}), **study.get("monitor_failed", {})}
         if failed:
