@@ -24,11 +24,13 @@ spread of the estimate's upper tail when the monitor gives its 95 % quantile
 (:math:`(p_{95} - \hat p)/1.645`, ``upper_kpa``), else its standard deviation: the monitor's
 posterior is not Gaussian (its changing regime, the range's bounds, early on a lean towards the
 prior), and with the quantile the probability reaches 0.95 exactly when the posterior's own 95 %
-quantile reaches the threshold (placard reference). On the MuJoCo ``warning`` runs this is a wash
-in detection (runs warned within 60 s 81 % against 79 % with σ, low tyres warned 81.9 % against
-83.1 %, median time 28 s against 24 s; ``nominal_long`` still without a false warning, the highest
-two-update probability of an inflated tyre 0.896 against 0.902); it is kept because it is the
-posterior's own probability at the decision. With
+quantile reaches the threshold (placard reference). On the MuJoCo ``warning`` runs (the
+monitor's windows ``rough`` above 10 %, its limit then) this is a wash in detection (runs warned
+within 60 s 81 % against 79 % with σ, low tyres warned 81.9 % against 83.1 %, median time 28 s
+against 24 s; ``nominal_long`` still without a false warning, the highest two-update probability
+of an inflated tyre 0.896 against 0.902 in that day's replay; the bench's ``max_held_probability``,
+on observable updates only as the rule counts them, gave 0.82 on 2026-12-02); it is kept
+because it is the posterior's own probability at the decision. With
 :math:`f_d` = 12.5 %, halfway between a tyre at its reference and FMVSS 138's 25 % and
 7.5 points below UN R141's 20 %: a tyre at the regulations' loss is warned once its σ is below
 about 7.5 % of the reference / 1.645, and one at its reference would need an error of more than

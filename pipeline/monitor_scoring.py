@@ -412,10 +412,19 @@ def _missed_run(
     return {"run": name, "road_class": road_class, "cause": cause, "tyres": tyres}
 
 
-def false_warnings(traces: Sequence[MonitorTrace], names: Sequence[str] | None = None) -> dict:
+def false_warnings(
+    traces: Sequence[MonitorTrace],
+    names: Sequence[str] | None = None,
+    *,
+    held_updates: int = DeflationRule().confirm_updates,
+) -> dict:
     """Warnings on runs at nominal pressure (each is false): number of warning onsets (rising
     edges per tyre), the runs with any, the simulated minutes and onsets per simulated minute, and
-    each onset's evidence (``events``: run index or `names[i]`, tyre, time, estimate, σ, truth)."""
+    each onset's evidence (``events``: run index or `names[i]`, tyre, time, estimate, σ, truth).
+    Where the traces carry the warning's loss probability, also the margin the rule kept
+    (``max_held_probability``): the highest probability any tyre held on `held_updates` consecutive
+    observable updates (the warning rule's confirmation; an unobservable update breaks the run), with
+    its run, tyre and time (the last of those updates)."""
     onsets = np.array([int(_rising_edges(tr.warning).sum()) for tr in traces])
     minutes = float(sum(tr.duration_s for tr in traces) / 60.0)
     events = []
@@ -429,7 +438,7 @@ def false_warnings(traces: Sequence[MonitorTrace], names: Sequence[str] | None =
                 "estimate_kpa": float(tr.p_hat[k, c]), "sigma_kpa": float(tr.sigma[k, c]),
                 "truth_kpa": float(truth),
             })  # fmt: skip
-    return {
+    out = {
         "false_warnings": int(onsets.sum()),
         "runs_with_false_warning": int(np.sum(onsets > 0)),
         "runs": len(traces),
@@ -437,6 +446,20 @@ def false_warnings(traces: Sequence[MonitorTrace], names: Sequence[str] | None =
         "per_simulated_min": float(onsets.sum() / minutes) if minutes > 0 else None,
         "events": events,
     }
+    if traces and all(tr.loss_probability is not None for tr in traces):
+        best = None
+        for i, tr in enumerate(traces):
+            prob = np.where(np.asarray(tr.observable, bool), np.nan_to_num(tr.loss_probability, nan=0.0), 0.0)
+            if prob.shape[0] < held_updates:
+                continue
+            # the lowest of each run of `held_updates` consecutive updates
+            held = np.min(np.lib.stride_tricks.sliding_window_view(prob, held_updates, axis=0), axis=-1)
+            k, c = np.unravel_index(int(np.argmax(held)), held.shape)
+            if best is None or held[k, c] > best["probability"]:
+                best = {"probability": float(held[k, c]), "run": names[i] if names is not None else i,
+                        "tyre": CORNERS[c], "t_s": float(tr.t_est[k + held_updates - 1])}  # fmt: skip
+        out["max_held_probability"] = best
+    return out
 
 
 def score_set(

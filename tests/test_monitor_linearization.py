@@ -98,16 +98,19 @@ def test_windows_near_the_rough_limit_count_less(rough_loaded_run):
     from suvtwin.estimators.monitor import MonitorConfig
 
     t, v, acc_s, acc_u, truth, loads = _signals(rough_loaded_run)
-    full = MonitorConfig(nonlinear_taper_from=MonitorConfig().max_nonlinear_share)
-    _, tapered = monitor_signals(t, v, acc_s, acc_u, loads=loads, preview=False)
+    # a taper from 5 % to a 10 % limit against full weight up to that limit
+    tapered_cfg = MonitorConfig(max_nonlinear_share=0.10, nonlinear_taper_from=0.05)
+    full = MonitorConfig(max_nonlinear_share=0.10, nonlinear_taper_from=0.10)
+    _, tapered = monitor_signals(t, v, acc_s, acc_u, loads=loads, preview=False, config=tapered_cfg)
     _, untapered = monitor_signals(t, v, acc_s, acc_u, loads=loads, preview=False, config=full)
     sig_t, sig_u = tapered.pressure_sigma_pa[-1] / 1e3, untapered.pressure_sigma_pa[-1] / 1e3
     assert np.all(sig_t >= sig_u - 1e-9)
     assert np.all(sig_t[2:] > 1.05 * sig_u[2:])
-    err = tapered.pressure_pa[-1] / 1e3 - truth
-    assert np.all(np.abs(err) <= 3.0 * sig_t)
+    for out in (tapered, monitor_signals(t, v, acc_s, acc_u, loads=loads, preview=False)[1]):  # + default
+        err = out.pressure_pa[-1] / 1e3 - truth
+        assert np.all(np.abs(err) <= 3.0 * out.pressure_sigma_pa[-1] / 1e3)
     with pytest.raises(InputError, match="nonlinear_taper_from"):
-        MonitorConfig(nonlinear_taper_from=0.2)
+        MonitorConfig(nonlinear_taper_from=MonitorConfig().max_nonlinear_share + 0.05)
 
 
 def _expected_spectra(monitor, models, speed, gd, p_kpa, distortion):

@@ -207,6 +207,25 @@ def test_warning_detection_explains_each_miss():
     assert "max_probability" not in plain["missed"][0]["tyres"]["fl"]
 
 
+def test_false_warnings_margin_is_the_probability_held_on_consecutive_observable_updates():
+    t_s = np.arange(0.0, 40.0, 0.1)
+    t_est = np.arange(0.0, 40.0, 4.0)
+    K = t_est.size
+    a = np.zeros((K, 4))
+    a[3:5, 1] = [0.7, 0.6]  # held 0.6 over two updates
+    a[7, 2] = 0.99  # a single update: not held
+    b = np.zeros((K, 4))
+    b[5:7, 3] = [0.8, 0.9]  # held 0.8, but the first of them is unobservable
+    obs = np.ones((K, 4), bool)
+    obs[5, 3] = False
+    runs = [replace(_trace(t_s, 200.0, t_est, 200.0), loss_probability=a),
+            replace(_trace(t_s, 200.0, t_est, 200.0, observable=obs), loss_probability=b)]  # fmt: skip
+    best = false_warnings(runs, ["a", "b"])["max_held_probability"]
+    assert best == {"probability": pytest.approx(0.6), "run": "a", "tyre": "fr", "t_s": 16.0}
+    assert false_warnings(runs, held_updates=1)["max_held_probability"]["probability"] == pytest.approx(0.99)
+    assert "max_held_probability" not in false_warnings([_trace(t_s, 200.0, t_est, 200.0)])
+
+
 def test_false_warnings_count_onsets_per_simulated_minute():
     t_s = np.arange(0.0, 120.0, 0.1)  # 2 min each
     t_est = np.arange(0.0, 120.0, 30.0)
