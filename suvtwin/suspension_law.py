@@ -392,6 +392,34 @@ def damper_hermite(
     return coef, (force * damper_force(sv[..., None] * x, law)).sum(axis=-1)
 
 
+def _lag_correlation(
+    f_in, psd, df, f_out, max_lag_s: float
+) -> tuple[np.ndarray, float, np.ndarray, np.ndarray]:
+    """Lags τ (0 to `max_lag_s`, 8 per period of the highest of `f_in`, `f_out`), their step, the
+    variance (..., 1) and the correlation ρ(τ) (..., lags) of a process of one-sided PSD `psd` on
+    `f_in` with bin widths `df` (the cosine transform)."""
+    f_in = np.asarray(f_in, dtype=float)
+    top = max(float(f_in.max()), float(np.max(f_out)))
+    d_tau = 1.0 / (8.0 * top)
+    tau = np.arange(0.0, max_lag_s + 0.5 * d_tau, d_tau)
+    psd = np.asarray(psd, dtype=float) * np.asarray(df, dtype=float)
+    cov = psd @ np.cos(2.0 * np.pi * f_in[:, None] * tau[None, :])
+    var = np.maximum(cov[..., :1], 1e-300)
+    return tau, d_tau, var, np.clip(cov / var, -1.0, 1.0)
+
+
+def _lag_window_psd(cov: np.ndarray, tau: np.ndarray, d_tau: float, max_lag_s: float, f_out) -> np.ndarray:
+    """One-sided PSD at `f_out` (Hz) of an autocovariance `cov` (..., lags) on the lags `tau`,
+    `d_tau` apart (:func:`_lag_correlation`): 4 ∫ C(τ) w(τ) cos(2πfτ) dτ (trapezoid at τ = 0), w
+    Parzen's lag window over `max_lag_s` (its transform is ≥ 0)."""
+    x = tau / max_lag_s
+    parzen = np.where(x <= 0.5, 1.0 - 6.0 * x**2 + 6.0 * x**3, 2.0 * (1.0 - x) ** 3)
+    weight = np.full(tau.size, d_tau) * parzen
+    weight[0] *= 0.5
+    f_out = np.asarray(f_out, dtype=float)
+    return 4.0 * (cov * weight) @ np.cos(2.0 * np.pi * tau[:, None] * f_out[None, :])
+
+
 def damper_residual_psd(
     law: SuspensionLaw,
     f_in: npt.ArrayLike,
@@ -415,15 +443,7 @@ def damper_residual_psd(
     :math:`c_{eq}` and r as a separate force between body and wheel holds the damper to second
     order (Roberts & Spanos [1]_, ch. 5). C's cosine transform with Parzen's lag window as in
     :func:`rectified_psd` (same `max_lag_s` limits)."""
-    f_in = np.asarray(f_in, dtype=float)
-    f_out = np.asarray(f_out, dtype=float)
-    psd = np.asarray(psd, dtype=float)
-    top = max(float(f_in.max()), float(f_out.max()))
-    d_tau = 1.0 / (8.0 * top)
-    tau = np.arange(0.0, max_lag_s + 0.5 * d_tau, d_tau)
-    cov_v = (psd * np.asarray(df, dtype=float)) @ np.cos(2.0 * np.pi * f_in[:, None] * tau[None, :])
-    var = np.maximum(cov_v[..., :1], 1e-300)
-    rho = np.clip(cov_v / var, -1.0, 1.0)
+    tau, d_tau, var, rho = _lag_correlation(f_in, psd, df, f_out, max_lag_s)
     coef, power = damper_hermite(law, np.sqrt(var[..., 0]), n_max)
     cov = np.zeros_like(rho)
     rho_n = rho.copy()
@@ -432,11 +452,7 @@ def damper_residual_psd(
         cov += coef[..., n, None] ** 2 * rho_n
     rest = np.maximum(power - (coef**2).sum(axis=-1), 0.0)
     cov += rest[..., None] * rho_n * rho
-    x = tau / max_lag_s  # Parzen's lag window
-    parzen = np.where(x <= 0.5, 1.0 - 6.0 * x**2 + 6.0 * x**3, 2.0 * (1.0 - x) ** 3)
-    weight = np.full(tau.size, d_tau) * parzen
-    weight[0] *= 0.5
-    return 4.0 * (cov * weight) @ np.cos(2.0 * np.pi * tau[:, None] * f_out[None, :])
+    return _lag_window_psd(cov, tau, d_tau, max_lag_s, f_out)
 
 
 def rectified_psd(
@@ -461,18 +477,6 @@ def rectified_psd(
     PSD over about 1.9/`max_lag_s` Hz). `max_lag_s` must stay below 1/(2 max(df)): a PSD given
     on bins df apart repeats its autocovariance every 1/df s. Leading term (ρ²/2): the velocity
     spectrum convolved with itself."""
-    f_in = np.asarray(f_in, dtype=float)
-    f_out = np.asarray(f_out, dtype=float)
-    psd = np.asarray(psd, dtype=float)
-    top = max(float(f_in.max()), float(f_out.max()))
-    d_tau = 1.0 / (8.0 * top)
-    tau = np.arange(0.0, max_lag_s + 0.5 * d_tau, d_tau)
-    cov_v = (psd * np.asarray(df, dtype=float)) @ np.cos(2.0 * np.pi * f_in[:, None] * tau[None, :])
-    var = np.maximum(cov_v[..., :1], 1e-300)
-    rho = np.clip(cov_v / var, -1.0, 1.0)
+    tau, d_tau, var, rho = _lag_correlation(f_in, psd, df, f_out, max_lag_s)
     cov_abs = (2.0 * var / np.pi) * (np.sqrt(1.0 - rho**2) + rho * np.arcsin(rho) - 1.0)
-    x = tau / max_lag_s  # Parzen's lag window
-    parzen = np.where(x <= 0.5, 1.0 - 6.0 * x**2 + 6.0 * x**3, 2.0 * (1.0 - x) ** 3)
-    weight = np.full(tau.size, d_tau) * parzen
-    weight[0] *= 0.5
-    return 4.0 * (cov_abs * weight) @ np.cos(2.0 * np.pi * tau[:, None] * f_out[None, :])
+    return _lag_window_psd(cov_abs, tau, d_tau, max_lag_s, f_out)
