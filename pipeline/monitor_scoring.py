@@ -462,6 +462,10 @@ def false_warnings(
     return out
 
 
+WARNING_WINDOWS_S = (60.0, 90.0, 120.0, 180.0, 300.0, 600.0)
+"""Windows of driving (s) the ``warning`` set's detection is also given for, where the runs last them."""
+
+
 def score_set(
     set_name: str, traces: Sequence[MonitorTrace], infos: Sequence[Mapping], *, tol_kpa: float = 12.5
 ) -> dict:
@@ -471,7 +475,8 @@ def score_set(
     after 2 s; by road class where each run has one class. Then per set (`infos[i]` from
     :class:`suvtwin.pipeline.monitor_scenarios.BenchRun`): ``slow_leak``/``drop``: tracking of
     ``info["change"]``; ``low_speed``: :func:`low_speed_shares`; ``warning``: detection of
-    ``info["deflated"]`` within 60 s of driving; ``nominal_long``: false warnings (all runs, and
+    ``info["deflated"]`` within 60 s of driving (and within each of :data:`WARNING_WINDOWS_S` the runs
+    last, ``warning_by_window``); ``nominal_long``: false warnings (all runs, and
     the lane-kept and weave runs apart).
     """
     if len(traces) != len(infos):
@@ -508,6 +513,16 @@ def score_set(
             names=[str(i.get("name", k)) for k, i in enumerate(infos)],
             classes=classes if all(isinstance(c, str) for c in classes) else None,
         )
+        # the regulations allow minutes (UN R141: 10 of driving): detection within longer windows
+        # on runs that last them
+        longest = max((t.duration_s for t in traces), default=0.0)
+        out["warning_by_window"] = {}
+        for window in WARNING_WINDOWS_S:
+            if window <= longest + 1.0:
+                d = warning_detection(traces, [i["deflated"] for i in infos], window_s=window)
+                out["warning_by_window"][f"{window:g}s"] = {
+                    k: d[k] for k in ("detected", "one_tyre", "all_four", "warnings_on_inflated_tyres")
+                }
     elif set_name == "nominal_long":
         weave = np.array([bool(i.get("weave")) for i in infos])
         names = [str(i.get("name", k)) for k, i in enumerate(infos)]

@@ -264,3 +264,17 @@ def test_score_set_names_the_set_criteria():
     assert out["change"]["settle_s_median"] == 0.0
     with pytest.raises(InputError):
         score_set("drop", [trace], [])
+
+
+def test_score_set_gives_warning_detection_within_the_longer_windows_the_runs_last():
+    t_s = np.arange(0.0, 130.0, 0.1)
+    t_est = np.arange(0.0, 130.0, 4.0)
+    late = np.zeros((t_est.size, 4), bool)
+    late[t_est >= 100.0, 0] = True  # warned after 100 s of driving
+    trace = _trace(t_s, 180.0, t_est, 180.0, warning=late)
+    out = score_set("warning", [trace], [{"road_class": "C", "deflated": ["fl"], "name": "w"}])
+    assert out["warning"]["detected"] == 0.0
+    by = out["warning_by_window"]
+    assert set(by) == {"60s", "90s", "120s"}  # the run lasts 130 s
+    assert by["90s"]["detected"] == 0.0 and by["120s"]["detected"] == 1.0
+    assert by["120s"]["one_tyre"] == {"runs": 1, "detected": 1.0}
