@@ -157,13 +157,18 @@ def test_damper_even_slope_against_a_sampled_regression():
         assert damper_even_slope(law, sigma) == pytest.approx(slope, rel=0.01)
 
 
+def _body_and_hop_process(rng, fs: float, n: int, *, hop_hz: float, hop_width_hz: float) -> np.ndarray:
+    """n samples at fs of a Gaussian process whose PSD has a hop-like peak (Gaussian, at hop_hz)
+    and half as high a body-like one at 1.5 Hz: random-phase spectrum, inverse FFT."""
+    f = np.fft.rfftfreq(n, 1 / fs)
+    shape = np.exp(-0.5 * ((f - hop_hz) / hop_width_hz) ** 2) + 0.5 * np.exp(-0.5 * ((f - 1.5) / 0.4) ** 2)
+    return np.fft.irfft((rng.normal(size=f.size) + 1j * rng.normal(size=f.size)) * np.sqrt(shape), n=n)
+
+
 def test_rectified_psd_against_a_simulated_gaussian_process():
     # a process with a body-like and a hop-like peak; |v|'s Welch PSD against the formula from v's
-    rng = np.random.default_rng(1)
-    fs, n = 200.0, 2**20
-    f = np.fft.rfftfreq(n, 1 / fs)
-    shape = np.exp(-0.5 * ((f - 12.0) / 1.5) ** 2) + 0.5 * np.exp(-0.5 * ((f - 1.5) / 0.4) ** 2)
-    v = np.fft.irfft((rng.normal(size=f.size) + 1j * rng.normal(size=f.size)) * np.sqrt(shape), n=n)
+    fs = 200.0
+    v = _body_and_hop_process(np.random.default_rng(1), fs, 2**20, hop_hz=12.0, hop_width_hz=1.5)
     from scipy.signal import welch
 
     fw, pv = welch(v, fs=fs, nperseg=8192)
@@ -203,11 +208,8 @@ def test_damper_hermite_coefficients_against_their_closed_forms():
 def test_damper_residual_psd_against_a_simulated_gaussian_process():
     # the residual F(v) − E[F] − c_eq v of the SUV's damper at a body-and-hop velocity process,
     # its Welch PSD against the formula from v's; a linear damper leaves nothing
-    rng = np.random.default_rng(4)
-    fs, n = 400.0, 2**20
-    f = np.fft.rfftfreq(n, 1 / fs)
-    shape = np.exp(-0.5 * ((f - 11.0) / 2.5) ** 2) + 0.5 * np.exp(-0.5 * ((f - 1.5) / 0.4) ** 2)
-    v = np.fft.irfft((rng.normal(size=f.size) + 1j * rng.normal(size=f.size)) * np.sqrt(shape), n=n)
+    fs = 400.0
+    v = _body_and_hop_process(np.random.default_rng(4), fs, 2**20, hop_hz=11.0, hop_width_hz=2.5)
     v *= 0.15 / v.std()  # around the knee (0.13 m/s)
     from scipy.signal import welch
 
