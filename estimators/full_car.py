@@ -271,6 +271,21 @@ def wheel_responses(
     return out * s[None, :, None, None]  # acceleration s² X per road velocity s R
 
 
+def _with_tyres(car: FullCar, f: npt.ArrayLike, speed_mps: float | None):
+    """The car at its own rates with every tyre on the ground: f (F,) Hz, s = i2πf, the body
+    points' Jacobian, the dynamic stiffness (F, n, n) including the tyres, and the tyres' own
+    k_t + s c_t (F, 4)."""
+    f = np.atleast_1d(np.asarray(f, dtype=float))
+    jac, stiff, damp, mass = _body_matrices(car, np.asarray(car.spring_rate, dtype=float),
+                                            np.asarray(car.damping, dtype=float))  # fmt: skip
+    s = 2j * np.pi * f  # (F,)
+    tyre = np.asarray(car.tire_stiffness, dtype=float)[None, :] + s[:, None] * np.asarray(car.tire_damping)
+    dyn = _dynamic_stiffness(car, s, stiff, damp, mass, speed_mps)  # (F, n, n)
+    wheels = 3 + np.arange(4)
+    dyn[:, wheels, wheels] += tyre
+    return f, s, jac, dyn, tyre
+
+
 def suspension_force_responses(
     f: npt.ArrayLike, car: FullCar, corner: int, *, speed_mps: float | None = None
 ) -> np.ndarray:
@@ -279,14 +294,7 @@ def suspension_force_responses(
     does not hold, e.g. what a damper's statistical linearization leaves), all tyres in contact
     with the car's stiffness and damping. `f` (F,) Hz; `speed_mps`: with the tyres' lateral slip at
     that speed (None: without). Returns complex (F, 2), (m/s²)/N."""
-    f = np.atleast_1d(np.asarray(f, dtype=float))
-    s = 2j * np.pi * f
-    springs, dampers = np.asarray(car.spring_rate, float), np.asarray(car.damping, float)
-    jac, stiff, damp, mass = _body_matrices(car, springs, dampers)
-    dyn = _dynamic_stiffness(car, s, stiff, damp, mass, speed_mps)
-    idx = 3 + np.arange(4)
-    tyres = np.asarray(car.tire_stiffness, float)[None, :] + s[:, None] * np.asarray(car.tire_damping, float)
-    dyn[:, idx, idx] += tyres
+    f, s, jac, dyn, _ = _with_tyres(car, f, speed_mps)
     force = np.zeros((f.size, dyn.shape[-1]), dtype=complex)
     force[:, :3] = jac[corner]  # generalized force of 1 N up at the body point
     force[:, 3 + corner] = -1.0
@@ -351,14 +359,8 @@ def track_responses(
     so the eight channels' spectrum is :math:`S_v\,G G^H` (G the returned (8, 2) per frequency):
     each corner's 2×2 block is :func:`corner_spectrum`'s. `speed_mps`: with the tyres' lateral
     slip at that speed (None: without)."""
-    f = np.atleast_1d(np.asarray(f, dtype=float))
-    jac, stiff, damp, mass = _body_matrices(car, np.asarray(car.spring_rate, dtype=float),
-                                            np.asarray(car.damping, dtype=float))  # fmt: skip
-    s = 2j * np.pi * f  # (F,)
-    tyre = np.asarray(car.tire_stiffness, dtype=float)[None, :] + s[:, None] * np.asarray(car.tire_damping)
-    dyn = _dynamic_stiffness(car, s, stiff, damp, mass, speed_mps)  # (F, n, n)
+    f, s, jac, dyn, tyre = _with_tyres(car, f, speed_mps)
     wheels = 3 + np.arange(4)
-    dyn[:, wheels, wheels] += tyre
     force = np.zeros((f.size, dyn.shape[-1], 4), dtype=complex)  # generalised force per unit road elevation
     force[:, wheels, np.arange(4)] = tyre
     x = np.linalg.solve(dyn, force)[:, :7]  # (F, 7, 4): displacement per road elevation under each wheel
