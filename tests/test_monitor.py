@@ -285,19 +285,25 @@ def test_learned_reference_after_reset():
         DeflationRule(detect_fraction=1.5)
 
 
-def test_window_kernel_matches_the_joint_estimators_profile_likelihood():
-    # the compiled grid kernel against suvtwin.estimators.joint.profile_loglik (numpy): same
-    # Whittle sums, the level profiled out; Laplace's term −½ log I from its Fisher information
+@pytest.mark.parametrize(
+    "weights, log_gain, scale",
+    [((1, 5), 8.0, 1.0),  # bands of 1–4 Fourier frequencies, as the monitor's
+     ((100, 301), 8.0, 1.0),  # wide bands: the product of the (1 + r)^w is flushed as it grows
+     (None, 57.0, 1e20)],  # fractional weights and a signal-to-noise ratio beyond 1e20: logarithms
+)  # fmt: skip
+def test_window_kernel_matches_the_joint_estimators_profile_likelihood(weights, log_gain, scale):
+    # the compiled grid kernel against suvtwin.estimators.joint.profile_loglik (numpy, a logarithm per
+    # band): same Whittle sums, the level profiled out; Laplace's term −½ log I from its Fisher information
     from suvtwin.estimators.joint import profile_loglik
     from suvtwin.estimators.monitor import _window_loglik
 
     rng = np.random.default_rng(3)
     n_f, n_g, n_d, n_b = 40, 7, 2, 3
     weight = np.zeros(n_f)
-    weight[5:33] = rng.integers(1, 5, 28)
+    weight[5:33] = rng.integers(*weights, 28) if weights else rng.uniform(0.3, 4.0, 28)
     base = np.exp(rng.normal(0.0, 0.5, (n_b, n_f)))
-    gain = np.exp(rng.normal(8.0, 1.0, (1, n_d, n_g, n_f)))
-    proj = rng.exponential(1.0, (2, n_d, n_f)) * (1.0 + 1e3 * rng.exponential(1.0, (2, n_d, n_f)))
+    gain = np.exp(rng.normal(log_gain, 1.0, (1, n_d, n_g, n_f)))
+    proj = rng.exponential(1.0, (2, n_d, n_f)) * (1.0 + 1e3 * scale * rng.exponential(1.0, (2, n_d, n_f)))
     ll, lam = np.zeros((2, n_d, n_b, n_g)), np.zeros((2, n_d, n_b, n_g))
     bounds = (np.log(1e-8), np.log(1e-1))
     proj_grid = np.repeat(proj[:, :, None, :], n_g, axis=2)  # the same periodogram at every pressure

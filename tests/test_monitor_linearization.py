@@ -167,8 +167,7 @@ def test_window_likelihood_peaks_at_the_truth_with_and_without_the_dampers_even_
     used = np.ones(len(models), dtype=bool)
     table = np.arange(len(models))[:, None]
     table[:, 0] = monitor._tables_for(np.arange(len(models)), spec[:, 0])[0]
-    nan = np.full(len(models), np.nan)
-    ll, _ = monitor._window_grid(spec, used, speed, table, nan, nan)
+    ll, _ = monitor._window_grid(spec, used, speed, table)
     best = monitor._p_coarse[np.argmax(ll.max(axis=(1, 2)), axis=1)]
     step = monitor._p_coarse[1] - monitor._p_coarse[0]
     assert np.all(np.abs(best - 200.0) <= step), best
