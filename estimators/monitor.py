@@ -483,31 +483,33 @@ class MonitorUpdate:
 
 
 @cached_njit(fastmath={"reassoc", "contract", "arcp"})
-def _window_loglik(proj, weight, lo, hi, base, gain, slot, lam_lo, lam_hi, out_ll, out_lam):
+def _window_loglik(proj, noise, weight, lo, hi, base, gain, slot, lam_lo, lam_hi, out_ll, out_lam):
     r"""One window's Whittle log-likelihood with its road level integrated out, on the parameter grid.
 
     For each corner c (gain-table slot ``slot[c]``, skipped where −1), damping d, slope b and
-    pressure g: r_f = e^λ base[b, f] gain[slot, d, g, f] (the signal-to-noise ratio along the
-    signal direction), :math:`\ell(\lambda) = -\sum_f w_f[\log(1 + r_f) + P_f/(1 + r_f)]`,
-    maximized over the window's log level λ = log Gd(n0) within [lam_lo, lam_hi] by Fisher scoring
-    (score U = :math:`\sum w q (P/(1+r) - 1)`, information :math:`I = \sum w q^2`, q = r/(1 + r));
-    out_ll = ℓ(λ̂) − ½ log I(λ̂) (Laplace's integral over λ with a flat prior, up to a constant
-    common to the whole grid), out_lam = λ̂. Each pressure starts from its neighbours' λ̂
-    extrapolated along the grid; once a step δ is below 0.02 it is the last: ℓ (the only sum with
-    logarithms) is evaluated once, where that step starts, and ℓ and log I are carried to its end
-    to second order (ℓ + Uδ − Iδ²/2; dlog I/dλ = 2Σwq²(1 − q)/I): two passes over the band per
-    grid point where the start is good. Σ_f w_f log(1 + r_f) is taken as the logarithm of the
-    product of the (1 + r_f)^{w_f} (w_f a count; a logarithm per band otherwise), flushed before
-    it could overflow: 2.5 times faster than a logarithm per band, the same ℓ within 1e-12.
+    pressure g, in units of the sensors' white noise N: the road's signal along the signal direction
+    s_f = e^λ base[b, f] gain[slot, d, g, f], the noise beside it n_f = noise[c, d, g, f] (1 + the
+    damper's even part; 1 where `noise` is empty), :math:`\ell(\lambda) = -\sum_f w_f[\log(n_f + s_f)
+    + P_f/(n_f + s_f)]`, maximized over the window's log level λ = log Gd(n0) within
+    [lam_lo, lam_hi] by Fisher scoring (r = s/n, q = r/(1 + r): score U = :math:`\sum w q (P/(n + s) -
+    1)`, information :math:`I = \sum w q^2`); out_ll = ℓ(λ̂) − ½ log I(λ̂) (Laplace's integral over λ
+    with a flat prior, up to a constant common to the whole grid), out_lam = λ̂. Each pressure
+    starts from its neighbours' λ̂ extrapolated along the grid; once a step δ is below 0.02 it is
+    the last: ℓ (the only sum with logarithms) is evaluated once, where that step starts, and ℓ and
+    log I are carried to its end to second order (ℓ + Uδ − Iδ²/2; dlog I/dλ = 2Σwq²(1 − q)/I): two
+    passes over the band per grid point where the start is good. Σ_f w_f log(n_f + s_f) is taken as
+    the logarithm of the product of the (n_f + s_f)^{w_f} (w_f a count; a logarithm per band
+    otherwise), flushed before it could overflow: 2.5 times faster than a logarithm per band, the
+    same ℓ within 1e-12.
 
-    `proj` (C, D, G, F): u^H S u / N of the window (dimensionless; per pressure where the noise
-    beside the road's signal depends on it, the damper's even part); `weight` (F,): Fourier
-    frequencies per band, nonzero only within [lo, hi); `base` (B, F): exp(β_b log(n/n0) +
-    log(4π² n0² v)); `gain` (S, D, G, F): |h|²/N on the pressure grid; outputs (C, D, B, G).
-    The same sums as :func:`suvtwin.estimators.joint.profile_loglik` (tested against it), compiled
-    and warm-started for the grid."""
+    `proj` (C, D, F): u^H S u / N of the window (dimensionless); `noise` (C, D, G, F) or empty;
+    `weight` (F,): Fourier frequencies per band, nonzero only within [lo, hi); `base` (B, F):
+    exp(β_b log(n/n0) + log(4π² n0² v)); `gain` (S, D, G, F): |h|²/N on the pressure grid; outputs
+    (C, D, B, G). The same sums as :func:`suvtwin.estimators.joint.profile_loglik` (tested against
+    it), compiled and warm-started for the grid."""
     n_c, n_d = proj.shape[0], proj.shape[1]
     n_b, n_g = base.shape[0], gain.shape[2]
+    white = noise.shape[0] == 0
     for c in range(n_c):
         s = slot[c]
         if s < 0:
@@ -523,8 +525,9 @@ def _window_loglik(proj, weight, lo, hi, base, gain, slot, lam_lo, lam_hi, out_l
                     else:  # method of moments
                         total = excess = 0.0
                         for f in range(lo, hi):
-                            total += weight[f] * base[b, f] * gain[s, d, g, f]
-                            excess += weight[f] * max(proj[c, d, g, f] - 1.0, 0.0)
+                            n = 1.0 if white else noise[c, d, g, f]
+                            total += weight[f] * base[b, f] * gain[s, d, g, f] / n
+                            excess += weight[f] * max(proj[c, d, f] / n - 1.0, 0.0)
                         lam = math.log(max(excess, 1e-12) / max(total, 1e-300))
                     lam = min(max(lam, lam_lo), lam_hi)
                     level = info = slope = score = step = 0.0
@@ -532,11 +535,11 @@ def _window_loglik(proj, weight, lo, hi, base, gain, slot, lam_lo, lam_hi, out_l
                         level = math.exp(lam)
                         score = info = slope = 0.0
                         for f in range(lo, hi):
-                            r = level * base[b, f] * gain[s, d, g, f]
-                            inv = 1.0 / (1.0 + r)
-                            q = r * inv
+                            sig = level * base[b, f] * gain[s, d, g, f]
+                            inv = 1.0 / ((1.0 if white else noise[c, d, g, f]) + sig)
+                            q = sig * inv
                             wf = weight[f]
-                            score += wf * q * (proj[c, d, g, f] * inv - 1.0)
+                            score += wf * q * (proj[c, d, f] * inv - 1.0)
                             wq2 = wf * q * q
                             info += wq2
                             slope += wq2 * (1.0 - q)
@@ -546,21 +549,20 @@ def _window_loglik(proj, weight, lo, hi, base, gain, slot, lam_lo, lam_hi, out_l
                         lam = new
                         if abs(step) < 0.02:
                             break
-                    # ℓ where the last step started (its logarithms once, not per iteration; Σ w log(1 + r)
-                    # as the logarithm of a product, w being a count of frequencies: a logarithm per
-                    # band cost more than the rest of the kernel) ...
+                    # ℓ where the last step started (its logarithms once, not per iteration; a
+                    # logarithm per band cost more than the rest of the kernel) ...
                     quad = logs = 0.0
                     prod = 1.0
                     for f in range(lo, hi):
-                        one_r = 1.0 + level * base[b, f] * gain[s, d, g, f]
+                        power = (1.0 if white else noise[c, d, g, f]) + level * base[b, f] * gain[s, d, g, f]
                         wf = weight[f]
-                        quad += wf * proj[c, d, g, f] / one_r
+                        quad += wf * proj[c, d, f] / power
                         whole = int(wf)
-                        if one_r > 1e20 or whole != wf:  # no product could hold it, or not a count
-                            logs += wf * math.log(one_r)
+                        if power > 1e20 or whole != wf:  # no product could hold it, or not a count
+                            logs += wf * math.log(power)
                         else:
                             for _ in range(whole):
-                                prod *= one_r
+                                prod *= power
                                 if prod > 1e280:
                                     logs += math.log(prod)
                                     prod = 1.0
@@ -768,6 +770,8 @@ class TyreMonitor:
         # the prior of (damping, slope): uniform × spike and slab, normalized (D, B)
         prior_db = np.exp(self._w_logprior)[None, :] * np.ones((n_d, 1))
         self._prior_db = prior_db / prior_db.sum()
+        # the prior of (damping, slope, pressure), the redraws' target (C, D, B, P)
+        self._prior_full = np.exp(self._log_prior)[:, None, None, :] * self._prior_db[None, :, :, None]
         self._kernels: dict[float, tuple] = {}
         self.reset()
 
@@ -1019,21 +1023,21 @@ class TyreMonitor:
         cfg = self.config
         n_c = len(self.models)
         status = np.zeros(n_c, dtype=np.int8)
-        x = np.concatenate([a_s.T, a_u.T])  # (2C, m): sprung rows, then unsprung rows
-        top, bottom = x.max(axis=1), x.min(axis=1)  # NaN where a sample is missing
-        finite = np.isfinite(top) & np.isfinite(bottom)
-        xf = np.where(finite[:, None], x, 0.0) if not np.all(finite) else x
-        top, bottom = np.where(finite, top, 0.0), np.where(finite, bottom, 0.0)
+        # per row (sprung rows, then unsprung rows): extremes, missing values, runs at an extreme
+        top, bottom, finite, clipped = _block_extremes(a_s, a_u)
         implausible = (np.maximum(top, -bottom) > cfg.max_accel_mps2) | (top == bottom)
-        clipped = _clipped(xf, top, bottom, cfg.accel_range_mps2)
-        spiky, med, mad = _spiky(xf, top, bottom, cfg.spike_z)
+        if cfg.accel_range_mps2 is not None:
+            clipped |= np.maximum(top, -bottom) >= 0.999 * cfg.accel_range_mps2
+        spiky, med, mad = _spiky(np.concatenate([a_s[::16].T, a_u[::16].T]), top, bottom, cfg.spike_z)
+        spiky &= finite
         # isolated spikes (at most 0.2 % of the block) are replaced by the block's median, in the
         # stream's buffer itself (a_s, a_u are views of it), so the windows see clean data
-        limit = max(1, int(0.002 * x.shape[1]))
-        for r in np.flatnonzero(spiky & finite):
-            where = np.flatnonzero(np.abs(xf[r] - med[r]) > cfg.spike_z * max(mad[r], 1e-12))
+        limit = max(1, int(0.002 * a_s.shape[0]))
+        for r in np.flatnonzero(spiky):
+            row = (a_s if r < n_c else a_u)[:, r % n_c]
+            where = np.flatnonzero(np.abs(row - med[r]) > cfg.spike_z * max(mad[r], 1e-12))
             if where.size <= limit:
-                (a_s if r < n_c else a_u)[where, r % n_c] = med[r]
+                row[where] = med[r]
                 self._state.counts["despiked"][r % n_c] += where.size
                 spiky[r] = False
         for c in range(n_c):
@@ -1151,16 +1155,13 @@ class TyreMonitor:
         `spec` (C, 1, F, 3) on the grid, for the corners `used` with gain-table slots `table` (C, 1)
         (each at its analysed suspension rate and tyre contact share): two (C, D, B, G) arrays (zero
         for the other corners); :func:`_window_loglik`. With the damper's even part
-        (:meth:`_damper_distortion`, e) the noise is N(1 + e): the kernel gets the periodogram and
-        the gains over N(1 + e), and −Σ_f w_f log(1 + e_f), which depends on (d, p), is added to its
-        output."""
+        (:meth:`_damper_distortion`, e) the noise beside the road's signal is N(1 + e), which depends
+        on (d, p)."""
         n_c = len(self.models)
         proj = np.ascontiguousarray(self._project(spec, table)[:, :, 0])  # (C, D, F)
         # the damper's even part: known extra power beside the noise, N + D_f = N (1 + extra)
         extra = self._damper_distortion(spec[:, 0], used, table) if self._distortion else None
-        proj = np.repeat(proj[:, :, None, :], self._p_coarse.size, axis=2)  # (C, D, G, F)
-        if extra is not None:
-            proj /= 1.0 + extra
+        noise = np.empty((0, 0, 0, 0)) if extra is None else extra + 1.0
         weight, x, log_cv = self._band(np.array([speed]))
         weight = np.ascontiguousarray(weight[0])
         inside = np.flatnonzero(weight > 0)
@@ -1183,13 +1184,9 @@ class TyreMonitor:
                 if qc.envelope_half_length > 0.0:  # the tyre's enveloping filters the road it reads
                     fine = envelope_power(self._fine / speed, qc.envelope_half_length)
                     gain[c] *= np.add.reduceat(fine, self._group_start) / self._group_size
-                if extra is not None:
-                    gain[c] /= 1.0 + extra[c]
             slot = np.where(used, np.arange(n_c), -1).astype(np.int64)
-        _window_loglik(proj, weight, int(inside[0]), int(inside[-1]) + 1, base, gain, slot,
+        _window_loglik(proj, noise, weight, int(inside[0]), int(inside[-1]) + 1, base, gain, slot,
                        *_LEVEL_BOUNDS, ll, lam)  # fmt: skip
-        if extra is not None:  # the kernel works in units of the noise, which here depends on (d, p)
-            ll -= (np.log1p(extra) @ weight)[:, :, None, :] * used[:, None, None, None]
         return ll, lam
 
     def _damper_distortion(self, spec: np.ndarray, used: np.ndarray, table: np.ndarray):
@@ -1281,17 +1278,19 @@ class TyreMonitor:
             return
         markov, walks, redraw, road = self._kernel(elapsed)
         post = self._state.post  # (C, R, D, B, P)
-        mixed = np.einsum("rs,crdbp->csdbp", markov, post)
-        moved = np.empty_like(mixed)
-        n_p = mixed.shape[-1]
-        for regime, walk in enumerate(walks):  # (to, from): a banded (sparse) or dense product per regime
-            moved[:, regime] = (walk @ mixed[:, regime].reshape(-1, n_p).T).T.reshape(mixed[:, regime].shape)
+        moved = np.empty_like(post)
+        n_p = post.shape[-1]
+        for to, walk in enumerate(walks):  # (to, from): a banded (sparse) or dense product per regime
+            mixed = (markov[0, to] * post[:, 0] + markov[1, to] * post[:, 1]).reshape(-1, n_p)
+            moved[:, to] = ((walk @ mixed.T).T if sparse.issparse(walk) else mixed @ walk.T).reshape(
+                post[:, to].shape)  # fmt: skip
         total_p = moved.sum(axis=(2, 3), keepdims=True)  # (C, R, 1, 1, P)
-        moved = (1.0 - road) * moved + road * self._prior_db[None, None, :, :, None] * total_p
-        mass = moved.sum(axis=(2, 3, 4), keepdims=True)  # (C, R, 1, 1, 1)
-        prior = np.exp(self._log_prior)[:, None, None, :] * self._prior_db[None, :, :, None]  # (C, D, B, P)
-        moved = (1.0 - redraw) * moved + redraw * mass * prior[:, None]
-        self._state.post = moved / moved.sum(axis=(1, 2, 3, 4), keepdims=True)
+        mass = total_p.sum(axis=4, keepdims=True)  # (C, R, 1, 1, 1): the road's redraw keeps it
+        moved *= (1.0 - road) * (1.0 - redraw)
+        moved += ((1.0 - redraw) * road) * self._prior_db[None, None, :, :, None] * total_p
+        moved += redraw * mass * self._prior_full[:, None]
+        moved /= moved.sum(axis=(1, 2, 3, 4), keepdims=True)
+        self._state.post = moved
 
     def _correct(self, ll: np.ndarray, weight: np.ndarray, used: np.ndarray) -> None:
         r"""Bayes' rule with one window: the posterior of each used corner times
@@ -1299,13 +1298,15 @@ class TyreMonitor:
         spline-interpolated from the coarse grid to 1 kPa, w the window's weight (each sample
         lies in segment/update windows: w = update/segment for a whole window)."""
         s = self._state
-        for c in np.flatnonzero(used):
-            fine = weight[c] * (ll[c] @ self._to_fine.T)  # (D, B, P)
-            fine -= fine.max()
-            post = s.post[c] * np.exp(fine)[None]
-            total = post.sum()
-            if total > 0.0 and np.isfinite(total):
-                s.post[c] = post / total
+        rows = np.flatnonzero(used)
+        if rows.size == 0:
+            return
+        fine = weight[rows, None, None, None] * (ll[rows] @ self._to_fine.T)  # (U, D, B, P)
+        fine -= fine.max(axis=(1, 2, 3), keepdims=True)
+        post = s.post[rows] * np.exp(fine)[:, None]
+        total = post.sum(axis=(1, 2, 3, 4))
+        ok = (total > 0.0) & np.isfinite(total)
+        s.post[rows[ok]] = post[ok] / total[ok, None, None, None, None]
 
     def _moments(self) -> _Fit:
         """The posterior's moments per corner: pressure (kPa) and waviness mean and variance, the
@@ -1444,27 +1445,52 @@ def _detrend(x: np.ndarray) -> np.ndarray:
     return centred - (centred @ n / (n @ n))[..., None] * n
 
 
-def _clipped(x: np.ndarray, top: np.ndarray, bottom: np.ndarray, full_scale: float | None) -> np.ndarray:
-    """Per row: three or more consecutive samples at the row's extreme `top` or `bottom` (or at the
-    full scale)."""
-    out = np.zeros(x.shape[0], dtype=bool)
-    if full_scale is not None:
-        out |= np.maximum(top, -bottom) >= 0.999 * full_scale
-    for extreme in (top, bottom):
-        at = x == extreme[:, None]
-        maybe = np.flatnonzero(np.count_nonzero(at, axis=1) >= 3)  # rare: look closer only there
-        for r in maybe:
-            out[r] |= bool(np.any(at[r, :-2] & at[r, 1:-1] & at[r, 2:]))
-    return out
+@cached_njit
+def _block_extremes(a_s, a_u):
+    """Per row of the block's samples (n, C) each, sprung rows then unsprung rows (2C,): the largest
+    and smallest value (0 where a value is missing), whether all are finite, and whether three or
+    more consecutive samples sit at the row's largest or smallest value (a flat top: clipped). One
+    pass over the samples and a second only where an extreme repeats."""
+    n, n_c = a_s.shape
+    top = np.zeros(2 * n_c)
+    bottom = np.zeros(2 * n_c)
+    finite = np.ones(2 * n_c, dtype=np.bool_)
+    clipped = np.zeros(2 * n_c, dtype=np.bool_)
+    for r in range(2 * n_c):
+        x = a_s if r < n_c else a_u
+        c = r % n_c
+        hi = lo = x[0, c]
+        ok = math.isfinite(hi)
+        for i in range(1, n):
+            v = x[i, c]
+            if not math.isfinite(v):
+                ok = False
+            elif v > hi:
+                hi = v
+            elif v < lo:
+                lo = v
+        if not ok:
+            finite[r] = False
+            clipped[r] = True  # as a row of zeros: the checks that follow refuse it anyway
+            continue
+        top[r], bottom[r] = hi, lo
+        run_hi = run_lo = 0
+        for i in range(n):
+            v = x[i, c]
+            run_hi = run_hi + 1 if v == hi else 0
+            run_lo = run_lo + 1 if v == lo else 0
+            if run_hi >= 3 or run_lo >= 3:
+                clipped[r] = True
+                break
+    return top, bottom, finite, clipped
 
 
-def _spiky(x: np.ndarray, top: np.ndarray, bottom: np.ndarray, z: float):
+def _spiky(sub: np.ndarray, top: np.ndarray, bottom: np.ndarray, z: float):
     """Per row: a sample more than z robust σ (1.4826 × median absolute deviation) from the median;
     and the rows' medians and robust σ.
 
-    The median and MAD are those of every 16th sample (a robust scale at a 16th of the cost);
-    only the row's extremes `top` and `bottom` need comparing with them."""
-    sub = x[:, ::16]
+    `sub`: every 16th sample of each row, whose median and MAD are taken (a robust scale at a 16th
+    of the cost); only the row's extremes `top` and `bottom` need comparing with them."""
     med = np.median(sub, axis=1)
     mad = 1.4826 * np.median(np.abs(sub - med[:, None]), axis=1)
     return np.maximum(top - med, med - bottom) > z * np.maximum(mad, 1e-12), med, mad

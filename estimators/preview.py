@@ -642,37 +642,32 @@ class PreviewTrack:
         seg0 = start - self._pending.shape[1]  # global index of the pending segment's first sample
         n = self.n
         n_seg = pending.shape[1] // n
-        fronts, rears, deltas, loads = [], [], [], []
-        for j in range(n_seg):
-            s = seg0 + j * n
-            block = pending[:, j * n : (j + 1) * n]
-            speed = block[1]
-            mean_v = float(np.mean(speed))
-            if not (np.all(np.isfinite(speed)) and mean_v >= self.config.min_speed_mps
-                    and np.ptp(speed) <= self.config.max_speed_change * mean_v):  # fmt: skip
-                self.counts["speed"] += 1
-                continue
-            tau = self.wheelbase_m / mean_v
-            m = int(math.floor(tau / self.dt))
-            lo = s - m - front_start
-            if s - m < 0 or lo < 0:
-                self.counts["warmup"] += 1
-                continue
-            seg_f = front[lo : lo + n]
-            if not (np.all(np.isfinite(seg_f)) and np.all(np.isfinite(block[0]))
-                    and np.all(np.isfinite(block[2:4]))):  # fmt: skip
-                self.counts["gap"] += 1
-                continue
-            fronts.append(seg_f)
-            rears.append(block[0])
-            deltas.append(tau - m * self.dt)
-            loads.append(block[[4, 0, 2, 3]])
-            self.counts["used"] += 1
-        if fronts:
-            self._accumulate(np.array(fronts), np.array(rears), np.array(deltas), np.array(loads), w)
+        # the finished segments, all at once: (5, S, n)
+        blocks = pending[:, : n_seg * n].reshape(5, n_seg, n)
+        speed = blocks[1]
+        mean_v = speed.mean(axis=1)  # NaN where a speed is missing: refused below
+        moving = (mean_v >= self.config.min_speed_mps) & (
+            np.ptp(speed, axis=1) <= self.config.max_speed_change * mean_v
+        )
+        tau = self.wheelbase_m / np.where(moving, mean_v, 1.0)
+        m = np.floor(tau / self.dt).astype(np.int64)
+        s = seg0 + n * np.arange(n_seg)
+        lo = s - m - front_start
+        ready = moving & (s - m >= 0) & (lo >= 0)
+        lo = np.where(ready, lo, 0)
+        seg_f = front[lo[:, None] + np.arange(n)[None, :]] if n_seg else np.zeros((0, n))  # (S, n)
+        sound = ready & np.all(np.isfinite(seg_f), axis=1)
+        sound &= np.all(np.isfinite(blocks[[0, 2, 3]]), axis=(0, 2))  # rear, sprung front and rear
+        self.counts["speed"] += int(np.sum(~moving))
+        self.counts["warmup"] += int(np.sum(moving & ~ready))
+        self.counts["gap"] += int(np.sum(ready & ~sound))
+        self.counts["used"] += int(np.sum(sound))
+        if np.any(sound):
+            self._accumulate(seg_f[sound], blocks[0, sound], (tau - m * self.dt)[sound],
+                             blocks[[4, 0, 2, 3]][:, sound].transpose(1, 0, 2), w)  # fmt: skip
         self._pending = pending[:, n_seg * n :].copy()
         self._front = front[-self._history :].copy()
-        return len(fronts)
+        return int(np.sum(sound))
 
     def _vector(self, name: str, x, size: int | None = None) -> np.ndarray:
         a = np.asarray(x, dtype=float)

@@ -286,14 +286,16 @@ def test_learned_reference_after_reset():
 
 
 @pytest.mark.parametrize(
-    "weights, log_gain, scale",
-    [((1, 5), 8.0, 1.0),  # bands of 1–4 Fourier frequencies, as the monitor's
-     ((100, 301), 8.0, 1.0),  # wide bands: the product of the (1 + r)^w is flushed as it grows
-     (None, 57.0, 1e20)],  # fractional weights and a signal-to-noise ratio beyond 1e20: logarithms
+    "weights, log_gain, scale, coloured",
+    [((1, 5), 8.0, 1.0, False),  # bands of 1–4 Fourier frequencies, as the monitor's
+     ((1, 5), 8.0, 1.0, True),  # noise beside the signal that depends on (damping, pressure)
+     ((100, 301), 8.0, 1.0, False),  # wide bands: the product of the powers is flushed as it grows
+     (None, 57.0, 1e20, False)],  # fractional weights and a signal-to-noise ratio beyond 1e20: logarithms
 )  # fmt: skip
-def test_window_kernel_matches_the_joint_estimators_profile_likelihood(weights, log_gain, scale):
+def test_window_kernel_matches_the_joint_estimators_profile_likelihood(weights, log_gain, scale, coloured):
     # the compiled grid kernel against suvtwin.estimators.joint.profile_loglik (numpy, a logarithm per
-    # band): same Whittle sums, the level profiled out; Laplace's term −½ log I from its Fisher information
+    # band): same Whittle sums, the level profiled out; Laplace's term −½ log I from its Fisher
+    # information. Noise n times the white one: the white-noise likelihood of P/n and gain/n, less Σ w log n
     from suvtwin.estimators.joint import profile_loglik
     from suvtwin.estimators.monitor import _window_loglik
 
@@ -304,16 +306,19 @@ def test_window_kernel_matches_the_joint_estimators_profile_likelihood(weights, 
     base = np.exp(rng.normal(0.0, 0.5, (n_b, n_f)))
     gain = np.exp(rng.normal(log_gain, 1.0, (1, n_d, n_g, n_f)))
     proj = rng.exponential(1.0, (2, n_d, n_f)) * (1.0 + 1e3 * scale * rng.exponential(1.0, (2, n_d, n_f)))
+    noise = 1.0 + rng.exponential(1.0, (2, n_d, n_g, n_f)) if coloured else np.empty((0, 0, 0, 0))
     ll, lam = np.zeros((2, n_d, n_b, n_g)), np.zeros((2, n_d, n_b, n_g))
     bounds = (np.log(1e-8), np.log(1e-1))
-    proj_grid = np.repeat(proj[:, :, None, :], n_g, axis=2)  # the same periodogram at every pressure
-    _window_loglik(proj_grid, weight, 5, 33, base, gain, np.array([0, -1]), *bounds, ll, lam)
+    _window_loglik(proj, noise, weight, 5, 33, base, gain, np.array([0, -1]), *bounds, ll, lam)
     assert np.all(ll[1] == 0.0)  # a corner with slot −1 is skipped
     for d in range(n_d):
         for b in range(n_b):
-            ref, ref_lam, fisher = profile_loglik(
-                proj[0, d][None], gain[0, d] * base[b][None], weight[None],
-                log_sv_bounds=(np.full((1, 1), bounds[0]), np.full((1, 1), bounds[1])),
-            )  # fmt: skip
-            np.testing.assert_allclose(lam[0, d, b], ref_lam[0], atol=2e-3)
-            np.testing.assert_allclose(ll[0, d, b], ref[0] - 0.5 * np.log(fisher[0]), atol=1e-3, rtol=1e-7)
+            for g in range(n_g):
+                n = noise[0, d, g] if coloured else np.ones(n_f)
+                ref, ref_lam, fisher = profile_loglik(
+                    (proj[0, d] / n)[None], (gain[0, d, g] * base[b] / n)[None], weight[None],
+                    log_sv_bounds=(np.full((1, 1), bounds[0]), np.full((1, 1), bounds[1])),
+                )  # fmt: skip
+                ref = ref[0, 0] - np.log(n) @ weight - 0.5 * np.log(fisher[0, 0])
+                np.testing.assert_allclose(lam[0, d, b, g], ref_lam[0, 0], atol=2e-3)
+                np.testing.assert_allclose(ll[0, d, b, g], ref, atol=1e-3, rtol=1e-7)
