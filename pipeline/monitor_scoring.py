@@ -53,7 +53,8 @@ class MonitorTrace:
     t_s : (T,) run time axis; truth_kpa : (T, 4) true pressures; speed_mps : (T,) vehicle speed.
     t_est : (K,) monitor update times; p_hat, sigma : (K, 4) estimate and its 1σ;
     observable, warning : (K, 4) bool flags (warning latched or not);
-    loss_probability : (K, 4) or None, the warning's probability of a loss at each update.
+    loss_probability : (K, 4) or None, the warning's probability of a loss at each update;
+    common_probability : (K,) or None, the probability of the car's common loss (NaN where not taken).
     """
 
     t_s: np.ndarray
@@ -65,12 +66,13 @@ class MonitorTrace:
     observable: np.ndarray
     warning: np.ndarray
     loss_probability: np.ndarray | None = None
+    common_probability: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         T, K = np.shape(self.t_s)[0], np.shape(self.t_est)[0]
         for name, shape in (("truth_kpa", (T, 4)), ("speed_mps", (T,)), ("p_hat", (K, 4)),
                             ("sigma", (K, 4)), ("observable", (K, 4)), ("warning", (K, 4)),
-                            ("loss_probability", (K, 4))):  # fmt: skip
+                            ("loss_probability", (K, 4)), ("common_probability", (K,))):  # fmt: skip
             if getattr(self, name) is None:
                 continue
             got = np.shape(getattr(self, name))
@@ -122,6 +124,11 @@ def monitor_trace(run: Mapping, monitor: Mapping) -> MonitorTrace:
         loss_probability=(
             per_tyre(monitor, "loss_probability", "monitor")
             if all(f"{c}_loss_probability" in monitor for c in CORNERS)
+            else None
+        ),
+        common_probability=(
+            col(monitor, "common_loss_probability", "monitor").astype(float)
+            if "common_loss_probability" in monitor
             else None
         ),
     )
@@ -424,7 +431,9 @@ def false_warnings(
     Where the traces carry the warning's loss probability, also the margin the rule kept
     (``max_held_probability``): the highest probability any tyre held on `held_updates` consecutive
     observable updates (the warning rule's confirmation; an unobservable update breaks the run), with
-    its run, tyre and time (the last of those updates)."""
+    its run, tyre and time (the last of those updates); where they carry the car's common-loss
+    probability, its highest held on `held_updates` consecutive updates where it was taken
+    (``max_held_common_probability``)."""
     onsets = np.array([int(_rising_edges(tr.warning).sum()) for tr in traces])
     minutes = float(sum(tr.duration_s for tr in traces) / 60.0)
     events = []
@@ -459,6 +468,18 @@ def false_warnings(
                 best = {"probability": float(held[k, c]), "run": names[i] if names is not None else i,
                         "tyre": CORNERS[c], "t_s": float(tr.t_est[k + held_updates - 1])}  # fmt: skip
         out["max_held_probability"] = best
+    if traces and all(tr.common_probability is not None for tr in traces):
+        best = None
+        for i, tr in enumerate(traces):
+            prob = np.nan_to_num(np.asarray(tr.common_probability, float), nan=0.0)
+            if prob.size < held_updates:
+                continue
+            held = np.min(np.lib.stride_tricks.sliding_window_view(prob, held_updates), axis=-1)
+            k = int(np.argmax(held))
+            if best is None or held[k] > best["probability"]:
+                best = {"probability": float(held[k]), "run": names[i] if names is not None else i,
+                        "t_s": float(tr.t_est[k + held_updates - 1])}  # fmt: skip
+        out["max_held_common_probability"] = best
     return out
 
 

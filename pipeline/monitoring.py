@@ -151,9 +151,10 @@ def monitor_run(
     ``used`` or why skipped), ``{c}_reference_kpa``, ``{c}_loss_probability``, ``{c}_warning``
     (latched), ``{c}_spring_rate_npm`` and ``{c}_tyre_contact`` (the suspension rate and tyre contact
     share the window was analysed with: :class:`~suvtwin.estimators.monitor.MonitorUpdate`), and the
-    shared ``road_level_hat_m3`` and ``waviness_hat``. `preview`: fuse each rear tyre with the
-    front→rear preview of its track (:func:`monitor_signals`). `corner_model`: how each corner's
-    spectrum is modelled, :data:`CORNER_MODELS`.
+    shared ``road_level_hat_m3``, ``waviness_hat`` and ``common_loss_probability`` (the observable
+    tyres' shared loss, :func:`~suvtwin.estimators.deflation.deflation_warnings`). `preview`: fuse
+    each rear tyre with the front→rear preview of its track (:func:`monitor_signals`).
+    `corner_model`: how each corner's spectrum is modelled, :data:`CORNER_MODELS`.
     """
     unknown = [c for c in corners if c not in CORNERS]
     if unknown or not corners:
@@ -189,6 +190,8 @@ def monitor_run(
         update.speed_mps,
         placard_kpa=placard_kpa, reset_at_s=t[0] if reset_at_s is None else reset_at_s, rule=rule,
         upper_kpa=update.pressure_upper_pa / 1e3, upper_level=TAIL_LEVELS[1],
+        tracks=[(corners.index(f), corners.index(r)) for f, r in (("fl", "rl"), ("fr", "rr"))
+                if f in corners and r in corners],
     )  # fmt: skip
     columns: dict[str, np.ndarray] = {"t_s": update.t_s, "speed_mps": update.speed_mps}
     for i, c in enumerate(corners):
@@ -204,6 +207,7 @@ def monitor_run(
         columns[f"{c}_spring_rate_npm"] = update.spring_rate[:, i]
         columns[f"{c}_tyre_contact"] = update.tyre_contact[:, i]
         columns[f"{c}_change_probability"] = update.change_probability[:, i]
+    columns["common_loss_probability"] = warn.common_probability
     columns["road_level_hat_m3"] = update.road_level
     columns["waviness_hat"] = update.waviness
     counts = monitor.counts
@@ -230,6 +234,7 @@ def monitor_run(
                     "loss_probability": float(warn.warning_probability[i]),
                     "pressure_hat_kpa": float(warn.warning_pressure_kpa[i]),
                     "reference_kpa": float(warn.warning_reference_kpa[i]),
+                    "by": "common loss" if warn.warning_common[i] else "own",
                 }
             )
             for i, c in enumerate(corners)

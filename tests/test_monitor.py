@@ -1,6 +1,8 @@
 """The online tyre-pressure monitor: accuracy on its own model class, causality, bounded state, faults,
 low speed, tracking a pressure change; the deflation warning on hand-made estimates."""
 
+import math
+
 import numpy as np
 import pytest
 from scipy.linalg import expm
@@ -270,6 +272,47 @@ def test_warning_from_the_posteriors_upper_tail():
     np.testing.assert_allclose(flat.probability, by_sigma.probability)
     with pytest.raises(ValueError, match="upper_level"):
         deflation_warnings(t, p, s, obs, placard_kpa=230.0, upper_kpa=upper, upper_level=0.4)
+
+
+def test_common_loss_of_all_four_tyres_warns_where_each_alone_cannot():
+    # all four tyres read 20 % below a 230 kPa placard (184 kPa) with σ 12 kPa: each alone has
+    # P(p < 0.875·230 = 201.25) = Φ(17.25/12) = 0.925, short of 0.95; together (tracks fl–rl and fr–rr
+    # correlated 0.75, the other pairs 0.15) the common estimate's variance is
+    # σ²(4 + 4·0.75 + 8·0.15)/16 = 0.5125 σ², so P = Φ(17.25/(12·√0.5125)) = Φ(2.008) = 0.978:
+    # all four are warned, by the common loss, on the second update
+    t, p, s, obs = _rows(np.full((6, 4), 184.0), 12.0)
+    tracks = ((0, 2), (1, 3))
+    w = deflation_warnings(t, p, s, obs, placard_kpa=230.0, tracks=tracks)
+    expected = 0.5 * math.erfc(-(17.25 / 230.0) / (12.0 / 230.0 * math.sqrt(0.5125)) / math.sqrt(2.0))
+    np.testing.assert_allclose(w.common_probability, expected, rtol=1e-9)
+    assert expected > 0.95 and np.all(w.probability < 0.95)
+    assert np.all(w.warning_time_s == t[1]) and np.all(w.warning_common)
+    # without the common test, none is warned
+    alone = deflation_warnings(t, p, s, obs, placard_kpa=230.0, tracks=tracks,
+                               rule=DeflationRule(common_alpha=None))  # fmt: skip
+    assert np.all(np.isnan(alone.common_probability)) and np.all(np.isnan(alone.warning_time_s))
+
+
+def test_common_loss_is_not_taken_where_the_tyres_differ():
+    # one tyre 30 % low (161 kPa), three at the 230 kPa placard, σ 8 kPa: one relative pressure cannot
+    # explain them (χ² ≫ its 3 degrees of freedom), so only the low tyre is warned, by its own estimate
+    t, p, s, obs = _rows(np.tile([161.0, 230.0, 230.0, 230.0], (6, 1)), 8.0)
+    w = deflation_warnings(t, p, s, obs, placard_kpa=230.0, tracks=((0, 2), (1, 3)))
+    assert np.all(np.isnan(w.common_probability))
+    assert np.isfinite(w.warning_time_s[0]) and not w.warning_common[0]
+    assert np.all(np.isnan(w.warning_time_s[1:]))
+    # three tyres, equal σ, every pair correlated ρ (no tracks given): the generalized least squares
+    # estimate is their mean, of variance σ²(1 + 2ρ)/3
+    t, p, s, obs = _rows(np.tile([190.0, 196.0, 193.0], (3, 1)), 6.0)
+    for rho in (0.0, 0.6):
+        w = deflation_warnings(t, p, s, obs, placard_kpa=230.0,
+                               rule=DeflationRule(track_correlation=rho, cross_correlation=0.0))  # fmt: skip
+        z = (201.25 - 193.0) / (6.0 * math.sqrt((1.0 + 2.0 * rho) / 3.0))
+        np.testing.assert_allclose(w.common_probability, 0.5 * math.erfc(-z / math.sqrt(2.0)), rtol=1e-9)
+    # the car's loss needs every tyre with a reference observable, and three of them
+    obs[:, 2] = False
+    w = deflation_warnings(t, p, s, obs, placard_kpa=230.0)
+    assert np.all(np.isnan(w.common_probability))
 
 
 def test_learned_reference_after_reset():

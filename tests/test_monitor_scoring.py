@@ -278,3 +278,18 @@ def test_score_set_gives_warning_detection_within_the_longer_windows_the_runs_la
     assert set(by) == {"60s", "90s", "120s"}  # the run lasts 130 s
     assert by["90s"]["detected"] == 0.0 and by["120s"]["detected"] == 1.0
     assert by["120s"]["one_tyre"] == {"runs": 1, "detected": 1.0}
+
+
+def test_false_warnings_margin_of_the_common_loss():
+    # the car's common-loss probability held over two consecutive updates where it was taken (NaN:
+    # not taken, which breaks a run)
+    t_s = np.arange(0.0, 40.0, 0.1)
+    t_est = np.arange(0.0, 40.0, 4.0)
+    common = np.full(t_est.size, np.nan)
+    common[2:4] = [0.5, 0.4]  # held 0.4
+    common[6] = 0.97  # alone
+    common[8] = 0.9  # next to a NaN: not held
+    run = replace(_trace(t_s, 200.0, t_est, 200.0), common_probability=common)
+    best = false_warnings([run], ["a"])["max_held_common_probability"]
+    assert best == {"probability": pytest.approx(0.4), "run": "a", "t_s": 12.0}
+    assert "max_held_common_probability" not in false_warnings([_trace(t_s, 200.0, t_est, 200.0)])
