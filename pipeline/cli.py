@@ -553,7 +553,8 @@ def monitor_command(
             + ("" if last[f"{c}_observable"] else " (not observable)")
         )  # fmt: skip
         note = "" if warned is None else (
-            f"; WARNING at {warned['t_s']:.1f} s (P = {warned['loss_probability']:.3f})"
+            f"; WARNING at {warned['t_s']:.1f} s (P = {warned['loss_probability']:.3f}"
+            + (", the car's common loss)" if warned.get("by") == "common loss" else ")")
         )  # fmt: skip
         typer.echo(f"  {c}: {now}{note}")
 
