@@ -56,7 +56,9 @@ is warned when either reaches ``probability`` on ``confirm_updates`` consecutive
 keep their own evidence only; a tyre at its reference is warned through the others only where
 one common value explains it within its σ beside them (wide σ, very low others). On the MuJoCo
 ``warning`` runs (60 s): all four low warned in 17 of 20 runs (13 with each tyre alone), one low
-tyre unchanged (71 of 80), no warning on an inflated tyre; with the common fit taken from two
+tyre unchanged (71 of 80), no warning on an inflated tyre; on ``nominal_long`` (506 simulated
+minutes at placard) no warning, the common loss's highest probability held on two updates 0.45
+(the tyres' own 0.82); with the common fit taken from two
 observable tyres on, a class D run's front tyre at its placard, read 26 % low at σ 17 kPa
 beside the low one, was warned: hence all of them, three or more.
 
