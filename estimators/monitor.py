@@ -1175,15 +1175,24 @@ class TyreMonitor:
         gain = self._gain
         if self._per_window_gain:  # the gains at this window's speed, one row per corner
             gain = self._gain[np.maximum(slot, 0)]
-            for c in np.flatnonzero(used):
-                qc = self.models[c]
-                if qc.full_car is not None:
-                    g = gain_at_delay(self._car_a[slot[c]], self._car_b[slot[c]], self._fine,
-                                      qc.full_car.wheelbase / speed)  # fmt: skip
-                    gain[c] = np.add.reduceat(g, self._group_start, axis=-1) / self._group_size
-                if qc.envelope_half_length > 0.0:  # the tyre's enveloping filters the road it reads
-                    fine = envelope_power(self._fine / speed, qc.envelope_half_length)
-                    gain[c] *= np.add.reduceat(fine, self._group_start) / self._group_size
+            rows = np.flatnonzero(used)
+            # corners in a full car: the gain at this window's front→rear delay, all corners of one
+            # wheelbase in one call
+            by_wheelbase: dict[float, list[int]] = {}
+            by_contact: dict[float, list[int]] = {}
+            for c in rows:
+                if self.models[c].full_car is not None:
+                    by_wheelbase.setdefault(self.models[c].full_car.wheelbase, []).append(c)
+                by_contact.setdefault(self.models[c].envelope_half_length, []).append(c)
+            for wheelbase, same in by_wheelbase.items():
+                g = gain_at_delay(self._car_a[slot[same]], self._car_b[slot[same]], self._fine,
+                                  wheelbase / speed)  # fmt: skip
+                gain[same] = np.add.reduceat(g, self._group_start, axis=-1) / self._group_size
+            # the tyre's enveloping filters the road it reads: once per contact length
+            for half, same in by_contact.items():
+                if half > 0.0:
+                    fine = envelope_power(self._fine / speed, half)
+                    gain[same] *= np.add.reduceat(fine, self._group_start) / self._group_size
             slot = np.where(used, np.arange(n_c), -1).astype(np.int64)
         _window_loglik(proj, noise, weight, int(inside[0]), int(inside[-1]) + 1, base, gain, slot,
                        *_LEVEL_BOUNDS, ll, lam)  # fmt: skip
