@@ -512,7 +512,8 @@ def monitor_command(
     out: Annotated[
         Path,
         typer.Option("--out", help="Output Parquet: one row per update (every 4 s), per tyre the pressure, "
-                     "its σ, 5 % and 95 % quantiles, flags, the warning's reference, probability and state."),
+                     "its σ, 5 % and 95 % quantiles, flags, the warning's reference, probability and state; "
+                     "the car's common-loss probability."),
     ],
     placard: Annotated[
         float | None,
