@@ -137,10 +137,10 @@ class DeflationRule:
 class DeflationWarnings:
     """Per update and tyre: reference (kPa, NaN until known), probability of a loss beyond the
     detection fraction, latched warning; per update: the probability that the observable tyres'
-    common relative pressure is that low (`common_probability`, NaN where fewer than two tyres
-    enter or the test that they share it fails); per tyre: the warning's time (s, NaN: none), and
-    the probability, estimate and reference (kPa) that set it, and whether the common loss set it
-    (`warning_common`)."""
+    common relative pressure is that low (`common_probability`, NaN where not every tyre with a
+    reference is observable, fewer than three are, or the test that they share it fails); per
+    tyre: the warning's time (s, NaN: none), and the probability, estimate and reference (kPa)
+    that set it, and whether the common loss set it (`warning_common`)."""
 
     reference_kpa: np.ndarray
     probability: np.ndarray
