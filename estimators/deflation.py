@@ -226,7 +226,7 @@ def deflation_warnings(
                 continue
             ref[k, c] = ref_now[c]
             spread = math.sqrt(spread_p[k, c] ** 2 + (keep * ref_sig[c]) ** 2)
-            prob[k, c] = 0.5 * scipy.special.erfc(-(keep * ref_now[c] - p[k, c]) / (spread * math.sqrt(2.0)))
+            prob[k, c] = _below(keep * ref_now[c], p[k, c], spread)
             rel[c], rel_sd[c] = p[k, c] / ref_now[c], spread / ref_now[c]
         # the common loss is the whole car's: every tyre with a reference observable, three or more
         inside = obs[k] & np.isfinite(rel)
@@ -263,15 +263,19 @@ def _common_loss(rel: np.ndarray, sd: np.ndarray, rho: np.ndarray, keep: float, 
     tests that one r explains them all (Aitken 1935)."""
     cov = rho * np.outer(sd, sd)
     try:
-        inv_one = np.linalg.solve(cov, np.ones(rel.size))
+        inv_one, inv_rel = np.linalg.solve(cov, np.column_stack([np.ones(rel.size), rel])).T
     except np.linalg.LinAlgError:
         return math.nan
     info = float(inv_one.sum())
     if not (np.isfinite(info) and info > 0.0):
         return math.nan
     r_hat = float(inv_one @ rel) / info
-    resid = rel - r_hat
-    chi2 = float(resid @ np.linalg.solve(cov, resid))
-    if scipy.special.chdtrc(rel.size - 1, chi2) < alpha:
+    chi2 = float(inv_rel @ rel) - r_hat**2 * info  # (u − r̂)ᵀΣ⁻¹(u − r̂)
+    if scipy.special.chdtrc(rel.size - 1, max(chi2, 0.0)) < alpha:
         return math.nan
-    return float(0.5 * scipy.special.erfc(-(keep - r_hat) * math.sqrt(info) / math.sqrt(2.0)))
+    return _below(keep, r_hat, 1.0 / math.sqrt(info))
+
+
+def _below(threshold: float, mean: float, spread: float) -> float:
+    """Φ((threshold − mean)/spread): the probability that a Gaussian estimate lies below `threshold`."""
+    return float(0.5 * scipy.special.erfc(-(threshold - mean) / (spread * math.sqrt(2.0))))
