@@ -456,31 +456,32 @@ def false_warnings(
         "events": events,
     }
     if traces and all(tr.loss_probability is not None for tr in traces):
-        best = None
-        for i, tr in enumerate(traces):
-            prob = np.where(np.asarray(tr.observable, bool), np.nan_to_num(tr.loss_probability, nan=0.0), 0.0)
-            if prob.shape[0] < held_updates:
-                continue
-            # the lowest of each run of `held_updates` consecutive updates
-            held = np.min(np.lib.stride_tricks.sliding_window_view(prob, held_updates, axis=0), axis=-1)
-            k, c = np.unravel_index(int(np.argmax(held)), held.shape)
-            if best is None or held[k, c] > best["probability"]:
-                best = {"probability": float(held[k, c]), "run": names[i] if names is not None else i,
-                        "tyre": CORNERS[c], "t_s": float(tr.t_est[k + held_updates - 1])}  # fmt: skip
-        out["max_held_probability"] = best
+        probs = [np.where(np.asarray(tr.observable, bool), np.nan_to_num(tr.loss_probability, nan=0.0), 0.0)
+                 for tr in traces]  # fmt: skip
+        out["max_held_probability"] = _max_held(probs, traces, names, held_updates, per_tyre=True)
     if traces and all(tr.common_probability is not None for tr in traces):
-        best = None
-        for i, tr in enumerate(traces):
-            prob = np.nan_to_num(np.asarray(tr.common_probability, float), nan=0.0)
-            if prob.size < held_updates:
-                continue
-            held = np.min(np.lib.stride_tricks.sliding_window_view(prob, held_updates), axis=-1)
-            k = int(np.argmax(held))
-            if best is None or held[k] > best["probability"]:
-                best = {"probability": float(held[k]), "run": names[i] if names is not None else i,
-                        "t_s": float(tr.t_est[k + held_updates - 1])}  # fmt: skip
-        out["max_held_common_probability"] = best
+        probs = [np.nan_to_num(np.asarray(tr.common_probability, float), nan=0.0)[:, None] for tr in traces]
+        out["max_held_common_probability"] = _max_held(probs, traces, names, held_updates, per_tyre=False)
     return out
+
+
+def _max_held(probs: list, traces: Sequence[MonitorTrace], names, held_updates: int, *, per_tyre: bool):
+    """The highest probability held on `held_updates` consecutive updates over runs `probs[i]`
+    (K, columns: the tyres, or one), with its run, tyre (`per_tyre`) and time (the last of those
+    updates); None without such a run."""
+    best = None
+    for i, (prob, tr) in enumerate(zip(probs, traces, strict=True)):
+        if prob.shape[0] < held_updates:
+            continue
+        # the lowest of each run of `held_updates` consecutive updates
+        held = np.min(np.lib.stride_tricks.sliding_window_view(prob, held_updates, axis=0), axis=-1)
+        k, c = np.unravel_index(int(np.argmax(held)), held.shape)
+        if best is None or held[k, c] > best["probability"]:
+            best = {"probability": float(held[k, c]), "run": names[i] if names is not None else i,
+                    "t_s": float(tr.t_est[k + held_updates - 1])}  # fmt: skip
+            if per_tyre:
+                best["tyre"] = CORNERS[c]
+    return best
 
 
 WARNING_WINDOWS_S = (60.0, 90.0, 120.0, 180.0, 300.0, 600.0)
