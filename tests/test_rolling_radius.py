@@ -1,0 +1,288 @@
+"""Radius analysis (estimators/rolling_radius.py): the turn's kinematics against a rigid body's
+velocities, the MuJoCo SUV's wheel speeds against MF-Tyre's effective rolling radius, streaming,
+causality, changes, bad input."""
+
+import math
+
+import numpy as np
+import pytest
+
+from suvtwin.errors import InputError
+from suvtwin.estimators.rolling_radius import RadiusConfig, RollingRadius, excess_of
+
+# the SUV's wheel centres from the rear axle's centre (x forward, y left), m
+L, TF, TR = 2.818, 1.606, 1.636
+POS = np.array([[L, TF / 2], [L, -TF / 2], [0.0, TR / 2], [0.0, -TR / 2]])
+R0 = 0.37
+
+
+def _wheel_speeds(radii, v, yaw_rate):
+    """Rigid car turning about a point on the rear axle's line: each wheel centre's speed
+    |v_rear + ψ̇ × r_i| (a vector product, not the module's closed form) over its radius."""
+    n = np.broadcast(v, yaw_rate).shape[0]
+    vel = np.zeros((n, 4, 2))
+    vel[..., 0] = v[:, None] - yaw_rate[:, None] * POS[None, :, 1]
+    vel[..., 1] = yaw_rate[:, None] * POS[None, :, 0]
+    return np.linalg.norm(vel, axis=-1) / radii
+
+
+def test_excess_sums_to_zero_and_reads_one_wheel():
+    d = np.array([0.0, 0.0, 0.0, -4e-3])
+    e = excess_of(d)
+    np.testing.assert_allclose(e, [4e-3 / 3, 4e-3 / 3, 4e-3 / 3, -4e-3])
+    assert abs(e.sum()) < 1e-15
+
+
+def test_turn_kinematics_leave_only_the_radii():
+    # a steady 40 m circle at 15 m/s and a 120 m one the other way: without the kinematic terms the
+    # outer wheels' excess would be ±10–30 ‰; the radii's differences must come out exactly
+    n = 4000
+    radii = R0 * np.array([1.0, 1.001, 0.997, 1.0])
+    v = np.full(n, 15.0)
+    yaw = np.r_[np.full(n // 2, 15.0 / 40.0), np.full(n // 2, -15.0 / 120.0)]
+    w = _wheel_speeds(radii, v, yaw)
+    ra = RollingRadius(POS, 0.01, R0, RadiusConfig(max_lat_accel_mps2=10.0, floor_permille=0.0))
+    rows = ra.update(np.arange(n) * 0.01, w, yaw, np.zeros(n), np.zeros(n))
+    # ρ takes v from the wheels' speeds times R0, off by the radii's spread (3 ‰ here): at 5.6 m/s²
+    # (beyond any limit a sample counts at) that is 2e-5 of a 30 ‰ term
+    np.testing.assert_allclose(rows.excess[-1], excess_of(np.log(radii)), atol=3e-5)
+    naive = excess_of(-np.log(w[:10]).mean(axis=0))
+    assert np.max(np.abs(naive - excess_of(np.log(radii)))) > 5e-3
+
+
+def test_blocks_in_hard_cornering_or_braking_and_samples_in_gaps_do_not_count():
+    n = 3000  # three 10 s blocks
+    w = _wheel_speeds(np.full(4, R0), np.full(n, 20.0), np.zeros(n))
+    ay, ax = np.zeros(n), np.zeros(n)
+    ay[:600] = 3.0  # RMS 2.3 m/s² over the first block (limit 2)
+    ay[1000:1200] = 3.0  # RMS 1.3 over the second
+    ax[1000:2000] = 3.0 * (-1) ** np.arange(1000)  # a rough road's scatter about a steady speed
+    ax[2000:] = 0.7  # braking through the third (limit 0.5)
+    w[1500:1510, 2] = np.nan
+    ra = RollingRadius(POS, 0.01, R0, RadiusConfig(block_s=10.0))
+    rows = ra.update(np.arange(n) * 0.01, w, np.zeros(n), ay, ax)
+    assert rows.used.tolist() == [False, True, False]
+    assert np.all(np.isnan(rows.excess[0])) and np.all(np.isfinite(rows.excess[1]))
+
+
+def test_chunking_does_not_change_the_result_and_the_state_is_bounded():
+    rng = np.random.default_rng(5)
+    n = 12_345
+    radii = R0 * (1 + np.array([0.0, 1e-3, -2e-3, 0.5e-3]))
+    yaw = 0.05 * np.sin(np.arange(n) * 0.002)
+    w = _wheel_speeds(radii, np.full(n, 25.0), yaw) * (1 + 3e-3 * rng.standard_normal((n, 4)))
+    t = np.arange(n) * 0.01
+    cfg = RadiusConfig(memory_blocks=5)
+    whole = RollingRadius(POS, 0.01, R0, cfg).update(t, w, yaw, np.zeros(n), np.zeros(n))
+    ra = RollingRadius(POS, 0.01, R0, cfg)
+    parts = [ra.update(t[i : i + 777], w[i : i + 777], yaw[i : i + 777], np.zeros(777)[: min(777, n - i)],
+                       np.zeros(777)[: min(777, n - i)]) for i in range(0, n, 777)]  # fmt: skip
+    for name in ("t_s", "excess", "sigma", "blocks", "used"):
+        np.testing.assert_array_equal(np.concatenate([getattr(p, name) for p in parts]), getattr(whole, name))
+    # the memory's 5 blocks and at most one block's samples (400 × (4 + 3))
+    assert whole.blocks.max() == 5 and ra.state_nbytes <= 400 * 7 * 8 + 1000
+    # causal: a record cut at a block's end gives that block's row
+    z = np.zeros(4000)
+    cut = RollingRadius(POS, 0.01, R0, cfg).update(t[:4000], w[:4000], yaw[:4000], z, z)
+    np.testing.assert_array_equal(cut.excess, whole.excess[: cut.t_s.size])
+    # σ: the blocks' scatter over √n (noise 3e-3 per sample, 400 samples per block, 4 wheels' excess),
+    # the floor, and the share of the samples' scatter taken as systematic
+    sample_sd = 3e-3 * np.sqrt(1 + 1 / 3)
+    e_sd = sample_sd / np.sqrt(400)
+    floor = np.hypot(cfg.floor_permille * 1e-3, cfg.roughness_share * sample_sd)
+    expected = np.sqrt(e_sd**2 / 5 + floor**2)
+    assert 0.5 * expected < np.median(whole.sigma[-10:]) < 2.0 * expected
+    np.testing.assert_allclose(whole.excess[-1], excess_of(np.log(radii)), atol=4 * expected)
+
+
+def test_a_drop_starts_the_memory_afresh():
+    n = 8000
+    radii = np.tile(np.full(4, R0), (n, 1))
+    radii[4000:, 3] *= 1 - 4e-3  # the rear right loses pressure: 4 ‰ of radius
+    rng = np.random.default_rng(1)
+    w = _wheel_speeds(radii, np.full(n, 25.0), np.zeros(n)) * (1 + 1e-3 * rng.standard_normal((n, 4)))
+    rows = RollingRadius(POS, 0.01, R0).update(np.arange(n) * 0.01, w, np.zeros(n), np.zeros(n), np.zeros(n))
+    k = np.searchsorted(rows.t_s, 40.0)  # the first block after the drop: held
+    assert not rows.changes[: k + 1].any() and abs(rows.excess[k, 3]) < 0.3e-3
+    assert rows.changes[k + 1, 3] and rows.blocks[k + 1, 3] == 2  # confirmed by the next
+    assert abs(rows.excess[k + 1, 3] + 4e-3) < 0.3e-3  # follows within two blocks
+
+
+def test_one_block_apart_is_an_outlier_not_a_change():
+    n = 8000
+    radii = np.tile(np.full(4, R0), (n, 1))
+    radii[4000:4400, 1] *= 1 - 11e-3  # one block: a wheel spinning on a rough stretch
+    rng = np.random.default_rng(2)
+    w = _wheel_speeds(radii, np.full(n, 25.0), np.zeros(n)) * (1 + 1e-3 * rng.standard_normal((n, 4)))
+    rows = RollingRadius(POS, 0.01, R0).update(np.arange(n) * 0.01, w, np.zeros(n), np.zeros(n), np.zeros(n))
+    assert not rows.changes.any()
+    assert np.all(np.abs(rows.excess[~np.isnan(rows.excess[:, 0])]) < 0.3e-3)
+
+
+def test_bad_input_names_the_field():
+    with pytest.raises(InputError, match="memory_blocks"):
+        RadiusConfig(memory_blocks=0)
+    with pytest.raises(InputError, match="positions_m"):
+        RollingRadius(np.zeros((4, 3)), 0.01, R0)
+    ra = RollingRadius(POS, 0.01, R0)
+    with pytest.raises(InputError, match="wheel speeds"):
+        ra.update(np.arange(3.0), np.ones((3, 3)), np.zeros(3), np.zeros(3), np.zeros(3))
+    ra.update(np.arange(3.0), np.ones((3, 4)), np.zeros(3), np.zeros(3), np.zeros(3))
+    with pytest.raises(InputError, match="continue"):
+        ra.update(np.arange(3.0), np.ones((3, 4)), np.zeros(3), np.zeros(3), np.zeros(3))
+
+
+def test_mujoco_wheel_speeds_read_mf_tyre_rolling_radius():
+    """Four pressures 230/200/170/140 kPa on a class C road at 90 km/h: each wheel's excess from its
+    speed against MF-Tyre 6.1's R_e (the .tir file's) at the pressure and the wheel's mean load."""
+    from suvtwin.mjcf.tire import effective_rolling_radius, load_tire
+    from suvtwin.mjcf.vehicle import load_vehicle
+    from suvtwin.pipeline.scenario import parse_scenario
+    from suvtwin.pipeline.simulator import simulate
+
+    sc = parse_scenario(
+        {"duration_s": 24.0, "seed": 71, "speed_kmh": 90.0,
+         "road": {"segments": [{"length_m": 700.0, "gd_n0": 80e-6}]},
+         "pressure_kpa": {"fl": 230.0, "fr": 200.0, "rl": 170.0, "rr": 140.0}},
+        source="test",
+    )  # fmt: skip
+    frame = simulate(sc).table
+    corners = ("fl", "fr", "rl", "rr")
+    veh = load_vehicle()
+    ch = veh.chassis
+    pos = np.array([[veh.wheelbase, ch.track_front / 2], [veh.wheelbase, -ch.track_front / 2],
+                    [0.0, ch.track_rear / 2], [0.0, -ch.track_rear / 2]])  # fmt: skip
+    t = frame["t_s"].to_numpy()
+    keep = t >= 4.0  # after the start's speed-up
+    w = frame[[f"{c}_wheel_speed_radps" for c in corners]].to_numpy()[keep]
+    ra = RollingRadius(pos, float(np.median(np.diff(t))), 0.37)
+    rows = ra.update(t[keep], w, *(frame[k].to_numpy()[keep] for k in ("yaw_rate_radps", "lat_accel_mps2",
+                                                                         "long_accel_mps2")))  # fmt: skip
+    tp = load_tire().to_array()
+    fz = [frame[f"{c}_tire_fz_n"].to_numpy()[keep].mean() for c in corners]
+    p = [frame[f"{c}_pressure_kpa"].to_numpy()[-1] * 1e3 for c in corners]
+    expected = excess_of(np.log([effective_rolling_radius(f, q, tp) for f, q in zip(fz, p, strict=True)]))
+    assert rows.used.all()
+    # the 140 kPa tyre runs about 10 ‰ smaller than the 230 kPa one: each excess within 0.5 ‰
+    assert expected[0] - expected[3] > 8e-3
+    np.testing.assert_allclose(rows.excess[-1], expected, atol=0.5e-3)
+    assert np.all(np.abs(rows.excess[-1] - expected) < 4 * rows.sigma[-1])
+
+
+# ------------------------------------------------------------------ fused into the warning
+def _evidence(n_k, excess, sigma, gain=0.1e-3, expected=None):
+    from suvtwin.estimators.deflation import RadiusEvidence
+
+    return RadiusEvidence(excess=np.tile(excess, (n_k, 1)), sigma=np.tile(sigma, (n_k, 1)),
+                          gain_per_kpa=np.full(4, gain), expected=expected)  # fmt: skip
+
+
+def test_fusion_reads_one_tyre_from_the_radii_where_the_others_are_known():
+    from suvtwin.estimators.deflation import DeflationRule, deflation_warnings
+
+    # three tyres known at the placard (σ 0.5 kPa), the fourth unknown to the vibration (σ 80 kPa,
+    # read at 230); its radius 4 ‰ smaller than the model's at the placard: 40 kPa low at 0.1 ‰/kPa
+    n_k = 3
+    gain = 0.1e-3
+    d = np.array([0.0, 0.0, 0.0, -40.0 * gain])
+    excess = d - (d.sum() - d) / 3
+    p = np.full((n_k, 4), 230.0)
+    sig = np.tile([0.5, 0.5, 0.5, 80.0], (n_k, 1))
+    rule = DeflationRule(radius_spread_permille=0.0, common_alpha=None)
+    ev = _evidence(n_k, excess, np.full(4, 0.05e-3), gain, np.zeros(4))
+    obs = np.ones((n_k, 4), bool)
+    w = deflation_warnings(np.arange(n_k) * 4.0, p, sig, obs, placard_kpa=230.0, rule=rule, radius=ev)
+    np.testing.assert_allclose(w.fused_kpa[-1], [230, 230, 230, 190], atol=0.5)
+    # σ of the fourth: its excess's σ over the gain, the others' σ adding little
+    assert 0.4 < w.fused_sigma_kpa[-1, 3] < 1.2
+    assert w.warning[-1].tolist() == [False, False, False, True]
+
+
+def test_fusion_is_blind_to_a_loss_all_four_share_and_honest_in_monte_carlo():
+    from suvtwin.estimators.deflation import DeflationRule, deflation_warnings
+
+    rng = np.random.default_rng(11)
+    rule = DeflationRule(radius_spread_permille=1.0, common_alpha=None)
+    gain, sig_v, sig_e = 0.1e-3, 10.0, 0.2e-3
+    tracks = ((0, 2), (1, 3))
+    rho = np.full((4, 4), rule.cross_correlation)
+    for f, r in tracks:
+        rho[f, r] = rho[r, f] = rule.track_correlation
+    np.fill_diagonal(rho, 1.0)
+    chol = np.linalg.cholesky(rho * sig_v**2)
+    a = (1 + 1 / 3) * np.eye(4) - np.full((4, 4), 1 / 3)
+    z = []
+    for _ in range(400):
+        truth = 230.0 + rng.uniform(-60, 20, 4)
+        p_hat = truth + chol @ rng.standard_normal(4)
+        spread = 1e-3 * rng.standard_normal(4)  # the tyres' own radii about the model's
+        # the wheels' own noise, σ_e·√(3/4) each, gives each excess σ_e
+        excess = a @ (gain * (truth - 230.0) + spread + sig_e * np.sqrt(0.75) * rng.standard_normal(4))
+        w = deflation_warnings([0.0], p_hat[None], np.full((1, 4), sig_v), np.ones((1, 4), bool),
+                               placard_kpa=230.0, rule=rule, tracks=tracks,
+                               radius=_evidence(1, excess, np.full(4, sig_e), gain, np.zeros(4)))  # fmt: skip
+        z.append((w.fused_kpa[0] - truth) / w.fused_sigma_kpa[0])
+    z = np.array(z)
+    assert np.all(np.abs(z.mean(axis=0)) < 0.15) and np.all(np.abs(z.std(axis=0) - 1.0) < 0.1)
+    # a loss shared by all four: the radii say nothing, the fused mean stays the vibration's
+    ev = _evidence(1, np.zeros(4), np.full(4, sig_e), gain, np.zeros(4))
+    w = deflation_warnings([0.0], np.full((1, 4), 180.0), np.full((1, 4), sig_v), np.ones((1, 4), bool),
+                           placard_kpa=230.0, rule=rule, tracks=tracks, radius=ev)  # fmt: skip
+    np.testing.assert_allclose(w.fused_kpa[0], 180.0, atol=1e-6)
+    common_sd = math.sqrt(rho.sum()) * sig_v / 4  # the mean of four correlated estimates
+    assert np.all(w.fused_sigma_kpa[0] >= common_sd - 1e-6) and np.all(w.fused_sigma_kpa[0] < sig_v)
+
+
+def test_learned_references_calibrate_the_radii_and_a_later_loss_warns_through_them():
+    from suvtwin.estimators.deflation import DeflationRule, deflation_warnings
+
+    # references learned at 64 s (60 s observable, σ 7 kPa each, from the vibration alone); from
+    # 120 s the rear right is 46 kPa (20 %) low: its radius shows it at once, the vibration only
+    # 30 kPa of it, at σ 10 kPa
+    t = np.arange(1, 51) * 4.0
+    gain = 0.1e-3
+    d = np.where(t[:, None] >= 120.0, [0.0, 0.0, 0.0, -46.0 * gain], 0.0) + 0.7e-3  # a tyre offset
+    excess = d - (d.sum(axis=1, keepdims=True) - d) / 3
+    from suvtwin.estimators.deflation import RadiusEvidence
+
+    ev = RadiusEvidence(excess=excess, sigma=np.full((t.size, 4), 0.2e-3), gain_per_kpa=np.full(4, gain))
+    p, sig, obs = np.full((t.size, 4), 230.0), np.full((t.size, 4), 7.0), np.ones((t.size, 4), bool)
+    p[t >= 120, 3], sig[t >= 120, 3] = 200.0, 10.0
+    rule = DeflationRule(common_alpha=None)
+    w = deflation_warnings(t, p, sig, obs, rule=rule, radius=ev)
+    assert np.isnan(w.fused_kpa[t < 64]).all() and np.isfinite(w.fused_kpa[t >= 64]).all()
+    # the offset the radii had at the reset is calibrated away: nothing apart before 120 s
+    np.testing.assert_allclose(w.fused_kpa[(t >= 64) & (t < 120)], 230.0, atol=1e-6)
+    after = t >= 120
+    # the radii put the rear right 46 ± 2.8 kPa below the others, the vibration 30 ± ~11: the radii
+    # dominate; the four's level is the vibration's (mean 222.5 kPa, weighted by σ and correlation),
+    # which the radii cannot see
+    np.testing.assert_allclose(w.fused_kpa[after, 3] - w.fused_kpa[after, :3].mean(axis=1), -46.0, atol=3.0)
+    np.testing.assert_allclose(w.fused_kpa[after].mean(axis=1), 222.5, atol=8.0)
+    assert w.warning_time_s[3] <= 124.0 and np.isnan(w.warning_time_s[:3]).all()
+    # without the radii the vibration's 200 ± 10 against 230 ± 7 warns nothing
+    assert np.isnan(deflation_warnings(t, p, sig, obs, rule=rule).warning_time_s).all()
+
+
+def test_the_radii_warn_one_tyre_against_the_others_before_any_reference_is_learned():
+    from suvtwin.estimators.deflation import DeflationRule, RadiusEvidence, deflation_warnings
+
+    # the vibration never sharp enough to learn a reference (σ 15 kPa); the radii calibrated 20 s
+    # after the reset; from 100 s the front left 20 % low, in another run all four
+    t = np.arange(1, 41) * 4.0
+    gain = 0.1e-3
+    p, sig, obs = np.full((t.size, 4), 230.0), np.full((t.size, 4), 15.0), np.ones((t.size, 4), bool)
+    sd = np.full((t.size, 4), 0.2e-3)
+    one = np.where(t[:, None] >= 100.0, [-46.0 * gain, 0.0, 0.0, 0.0], 0.0)
+    four = np.where(t[:, None] >= 100.0, -46.0 * gain, 0.0) + np.zeros((1, 4))
+    rule = DeflationRule(common_alpha=None)
+    gains = np.full(4, gain)
+    w = deflation_warnings(t, p, sig, obs, rule=rule, radius=RadiusEvidence(excess_of(one), sd, gains))
+    rel = w.relative_probability
+    assert np.isnan(rel[t < 20]).all() and np.isfinite(rel[t >= 20]).all()
+    assert np.isnan(w.reference_kpa).all()  # never learned
+    assert w.warning_time_s[0] == 104.0 and np.isnan(w.warning_time_s[1:]).all()
+    assert w.warning_relative[0] and w.relative_probability[-1, 0] > 0.999
+    # all four alike: the radii see nothing
+    w = deflation_warnings(t, p, sig, obs, rule=rule, radius=RadiusEvidence(excess_of(four), sd, gains))
+    assert np.isnan(w.warning_time_s).all() and np.nanmax(w.relative_probability) < 1e-6
