@@ -1,6 +1,6 @@
 """Cost of the online monitor over a long drive: is the cost per second of data the same after an hour?
 
-Run: ``python bench/monitor_cost.py [minutes] [run.parquet] [--no-preview]`` — prints JSON.
+Run: ``python bench/monitor_cost.py [minutes] [run.parquet] [--no-preview] [--no-radius]`` — prints JSON.
 
 A MuJoCo run (default: a 60 s class C run at 90 km/h with four different pressures, simulated
 here) is streamed through one four-corner :class:`suvtwin.estimators.monitor.TyreMonitor` again
@@ -10,8 +10,11 @@ over the last minute, their ratio (the issue asks ≤ 1.2 at one hour; single mi
 the machine's load, so also the ratio of the medians of the last and first five minutes and the
 spread over all minutes), the real-time factor
 over the whole drive (asks ≥ 500), the state's size at the start and the end (bytes), and the
-compile time of the first call (excluded from the rates). With both tracks' front→rear preview,
-as :func:`suvtwin.pipeline.monitoring.monitor_run` by default; ``--no-preview``: without.
+compile time of the first call (excluded from the rates). With both tracks' front→rear preview
+and the wheel speeds' radius analysis (:class:`suvtwin.estimators.rolling_radius.RollingRadius`,
+fed the same chunks), as :func:`suvtwin.pipeline.monitoring.monitor_run` by default;
+``--no-preview``, ``--no-radius``: without (``radius_share`` is the radius analysis's part of the
+wall time).
 """
 
 from __future__ import annotations
@@ -47,13 +50,16 @@ def _run_file() -> str:
 
 
 def main() -> None:
-    args = [a for a in sys.argv[1:] if a != "--no-preview"]
+    args = [a for a in sys.argv[1:] if a not in ("--no-preview", "--no-radius")]
     preview = "--no-preview" not in sys.argv[1:]
+    radius = "--no-radius" not in sys.argv[1:]
     minutes = float(args[0]) if len(args) > 0 else 60.0
     path = args[1] if len(args) > 1 else _run_file()
     from suvtwin.estimators.monitor import TyreMonitor
+    from suvtwin.estimators.rolling_radius import RollingRadius
+    from suvtwin.mjcf.tire import load_tire
     from suvtwin.mjcf.vehicle import load_vehicle
-    from suvtwin.pipeline.monitoring import corner_models
+    from suvtwin.pipeline.monitoring import corner_models, wheel_positions
 
     frame = pq.read_table(path).to_pandas()
     t0 = frame["t_s"].to_numpy()
@@ -61,26 +67,35 @@ def main() -> None:
     v = frame["speed_mps"].to_numpy()
     acc_s = frame[[f"{c}_accel_sprung_mps2" for c in CORNERS]].to_numpy()
     acc_u = frame[[f"{c}_accel_unsprung_mps2" for c in CORNERS]].to_numpy()
+    wheel = frame[[f"{c}_wheel_speed_radps" for c in CORNERS]].to_numpy()
+    yaw, lat, lon = (frame[k].to_numpy() for k in ("yaw_rate_radps", "lat_accel_mps2", "long_accel_mps2"))
     n = t0.size
     tracks = ((0, 2), (1, 3)) if preview else ()  # both tracks' preview (the default), or none
     monitor = TyreMonitor(corner_models(CORNERS), dt=dt, names=CORNERS, tracks=tracks,
                           wheelbase_m=load_vehicle().wheelbase)
+    analysis = RollingRadius(wheel_positions(load_vehicle()), dt, load_tire().unloaded_radius)
     chunk = int(round(10.0 / dt))
     start = time.perf_counter()
     monitor.update(np.arange(chunk) * dt, v[:chunk], acc_s[:chunk], acc_u[:chunk])  # compiles
+    if radius:
+        analysis.update(np.arange(chunk) * dt, wheel[:chunk], yaw[:chunk], lat[:chunk], lon[:chunk])
     compile_s = time.perf_counter() - start
-    state_start = monitor.state_nbytes
+    state_start = monitor.state_nbytes + (analysis.state_nbytes if radius else 0)
     total = int(round(minutes * 60.0 / dt))
     done = chunk
     per_minute = []  # (data s, wall s) per minute of data
     minute_data = minute_wall = 0.0
-    wall_total = 0.0
+    wall_total = radius_wall = 0.0
     while done < total:
         i = done % n
         m = min(chunk, n - i, total - done)
         t = (done + np.arange(m)) * dt
         tick = time.perf_counter()
         monitor.update(t, v[i : i + m], acc_s[i : i + m], acc_u[i : i + m])
+        if radius:
+            mid = time.perf_counter()
+            analysis.update(t, wheel[i : i + m], yaw[i : i + m], lat[i : i + m], lon[i : i + m])
+            radius_wall += time.perf_counter() - mid
         wall = time.perf_counter() - tick
         done += m
         wall_total += wall
@@ -96,6 +111,7 @@ def main() -> None:
         "data_minutes": round(done * dt / 60.0, 2),
         "corners": len(CORNERS),
         "preview": preview,
+        "radius": radius,
         "compile_s": round(compile_s, 2),
         "wall_per_data_s_first_minute_ms": round(1e3 * first, 3),
         "wall_per_data_s_last_minute_ms": round(1e3 * last, 3),
@@ -107,8 +123,9 @@ def main() -> None:
         },
         "median_last_5_over_first_5_minutes": round(float(np.median(rates[-5:]) / np.median(rates[:5])), 3),
         "real_time_factor": round((done - chunk) * dt / wall_total, 1),
+        "radius_share": round(radius_wall / wall_total, 4),
         "state_bytes_start": state_start,
-        "state_bytes_end": monitor.state_nbytes,
+        "state_bytes_end": monitor.state_nbytes + (analysis.state_nbytes if radius else 0),
         "segments": monitor.counts["segments"],
     }, indent=2))  # fmt: skip
 

@@ -62,6 +62,24 @@ minutes at placard) no warning, the common loss's highest probability held on tw
 observable tyres on, a class D run's front tyre at its placard, read 26 % low at σ 17 kPa
 beside the low one, was warned: hence all of them, three or more.
 
+**The wheels' rolling radii.** Given the radius analysis (:class:`RadiusEvidence`, from
+:class:`suvtwin.estimators.rolling_radius.RollingRadius`), each row where every tyre has a
+reference fuses it with the vibration estimates (:func:`_fuse_radius`: generalized least squares
+of the four losses p − reference, the vibration estimates and learned references correlated as in
+the common fit, the radius excess linearized about the references, rank three), and the tyre's
+probability is the fused estimate's. The excess is compared against the tyre model at the placard
+within the tyres' spread ``radius_spread_permille`` (placard), or against its own value when the
+references were learned (the calibration at that moment). With learned references the radii are
+also calibrated ``radius_learn_s`` after the reset, and a tyre that has since lost
+``detect_fraction`` more than the others' mean warns on its own (:func:`_relative_loss`,
+``relative_probability``, ``warning_relative``): before the vibration has learned any reference,
+as production wheel-speed systems do after their reset. A row counts for the confirmation where
+the tyre is observable, fused or compared. On the MuJoCo ``warning`` runs (placard, spread 1 ‰):
+warned within 60 s 92 % (one tyre 75 of 80, all four 17 of 20; 88 % without), no warning on an
+inflated tyre; ``nominal_long`` (506 min): no false warning, the highest probability held 0.61;
+``reset_leak`` (learned references, a 20 % leak after 150–180 s): one tyre warned within 60 s of
+the leak's end in 31 of 32 runs, none before it.
+
 Every value at a row uses only that row and earlier ones (causal), so it can run alongside
 the monitor. No MuJoCo here.
 """
@@ -76,7 +94,7 @@ import scipy.special
 
 from suvtwin.errors import InputError
 
-__all__ = ["DeflationRule", "DeflationWarnings", "deflation_warnings"]
+__all__ = ["DeflationRule", "DeflationWarnings", "RadiusEvidence", "deflation_warnings"]
 
 
 @dataclass(frozen=True)
@@ -105,6 +123,17 @@ class DeflationRule:
         0.56 and 0.32 at 10, 30 and 40 s, the two fronts −0.2 to 0.15; the largest are taken
         (0.75, 0.15): the common loss's σ is then not smaller than the data's. Without the tracks
         given, every pair gets `track_correlation`.
+    radius_spread_permille : float
+        With a placard reference, the spread (σ) of the tyres' effective rolling radii about the
+        tyre model's at the same pressure and load, ‰ (manufacturing, wear): the radius analysis
+        then compares the tyres against the model within it (1 ‰ = 0.37 mm on the SUV's tyre; an
+        assumption for a real car, where a reset calibrates it away; the simulator's tyres are
+        identical, 0). With a learned reference the radii are calibrated at the reset and this
+        is not used.
+    radius_learn_s : float
+        With a learned reference, the time after the reset at which the radii are calibrated for the
+        relative route (each tyre against the others since then; 20 s: five blocks of the radius
+        analysis), s.
     """
 
     detect_fraction: float = 0.125
@@ -115,6 +144,8 @@ class DeflationRule:
     common_alpha: float | None = 0.05
     track_correlation: float = 0.75
     cross_correlation: float = 0.15
+    radius_spread_permille: float = 1.0
+    radius_learn_s: float = 20.0
 
     def __post_init__(self) -> None:
         checks = [
@@ -127,6 +158,8 @@ class DeflationRule:
             ("track_correlation", 0.0 <= self.track_correlation < 1.0, "[0, 1)"),
             ("cross_correlation", 0.0 <= self.cross_correlation <= self.track_correlation,
              "0–track_correlation"),
+            ("radius_spread_permille", 0.0 <= self.radius_spread_permille <= 20.0, "0–20 ‰"),
+            ("radius_learn_s", 0.0 <= self.radius_learn_s <= 3600.0, "0–3600 s"),
         ]
         for name, ok, allowed in checks:
             if not ok:
@@ -151,6 +184,91 @@ class DeflationWarnings:
     warning_reference_kpa: np.ndarray
     common_probability: np.ndarray
     warning_common: np.ndarray
+    fused_kpa: np.ndarray
+    fused_sigma_kpa: np.ndarray
+    relative_probability: np.ndarray
+    warning_relative: np.ndarray
+
+
+@dataclass(frozen=True)
+class RadiusEvidence:
+    r"""The radius analysis (:class:`suvtwin.estimators.rolling_radius.RollingRadius`) at the warning's rows.
+
+    `excess`, `sigma` (K, C): each tyre's log effective rolling radius over the other tyres' mean
+    and its σ (dimensionless) at each row (NaN: none yet); `gain_per_kpa` (C,): the change of the
+    tyre's log radius per kPa of its pressure, > 0 (the tyre model's secant from the reference to the
+    detection threshold: exact where the warning decides); `expected` (C,) or None: the excess with
+    every tyre at the placard pressure, from the tyre model at the tyres' loads (None: calibrated
+    at the first row where every tyre has a learned reference).
+
+    Linearized, :math:`e - e_0 = A\,G\,(p - p_{ref}) + \varepsilon` with A the excess operator
+    (:func:`suvtwin.estimators.rolling_radius.excess_of`), G = diag(gain): rank C − 1, since a loss
+    shared by all tyres leaves every excess unchanged.
+    """
+
+    excess: np.ndarray
+    sigma: np.ndarray
+    gain_per_kpa: np.ndarray
+    expected: np.ndarray | None = None
+
+    def check(self, n_k: int, n_c: int) -> None:
+        """One clear message for arrays of the wrong shape or a gain that is not positive."""
+        if np.shape(self.excess) != (n_k, n_c) or np.shape(self.sigma) != (n_k, n_c):
+            raise InputError(f"radius excess and sigma must be ({n_k}, {n_c}), got {np.shape(self.excess)}")
+        gain = np.asarray(self.gain_per_kpa, dtype=float)
+        if gain.shape != (n_c,) or not np.all(np.isfinite(gain) & (gain > 0)):
+            raise InputError(f"radius gain_per_kpa must be ({n_c},) positive values, got {gain!r}")
+        if self.expected is not None and np.shape(self.expected) != (n_c,):
+            raise InputError(f"radius expected must be ({n_c},), got {np.shape(self.expected)}")
+
+    def calibration(self, k: int, placard: bool, spread_permille: float):
+        """The excess the references go with and its covariance: the model's at the placard with the
+        tyres' spread (placard), else the analysis's own at row `k` (learned at the reset)."""
+        n_c = self.excess.shape[1]
+        if placard and self.expected is not None:
+            return np.asarray(self.expected, dtype=float), _excess_cov(np.full(n_c, spread_permille * 1e-3))
+        return self.excess[k].copy(), _excess_cov(_wheel_sd(self.sigma[k]))
+
+
+def _excess_operator(n_c: int) -> np.ndarray:
+    """A with (A d)_i = d_i − mean of the others' d (C, C)."""
+    return (1.0 + 1.0 / (n_c - 1)) * np.eye(n_c) - np.full((n_c, n_c), 1.0 / (n_c - 1))
+
+
+def _excess_cov(wheel_sd: np.ndarray) -> np.ndarray:
+    """Covariance of the excesses A d of wheel values d independent with σ `wheel_sd` (C,): A diag(σ²) Aᵀ."""
+    a = _excess_operator(wheel_sd.size)
+    return (a * wheel_sd**2) @ a.T
+
+
+def _wheel_sd(excess_sd: np.ndarray) -> np.ndarray:
+    """The wheels' own σ that gives each excess the σ `excess_sd`: var(e_i) = σ²(1 + 1/(C − 1))."""
+    n_c = excess_sd.size
+    return excess_sd * math.sqrt((n_c - 1) / n_c)
+
+
+def _fuse_radius(p, sd, rho, ref, radius: RadiusEvidence, k: int, calibration, ref_sd):
+    r"""The Gaussian fusion of the vibration estimates `p` ± `sd` (C,), kPa, correlated by `rho`, with
+    the radius analysis at row `k` against its `calibration` (e0, its covariance), for the loss
+    L = p − `ref` (the references, ± `ref_sd` correlated as the estimates: learned from them; 0 for
+    a placard): :math:`\Lambda = \Sigma^{-1} + H^T R^{-1} H`, :math:`\hat L = \Lambda^{-1}(\Sigma^{-1}
+    (\hat p - p_{ref}) + H^T R^{-1} y)`, Σ = Σ_v + Σ_ref, y = e − e0, H = A G, R = A diag(σ_δ²) Aᵀ +
+    cov(e0) (σ_δ the wheels' own σ that gives each excess its σ), on the first C − 1 rows (rank
+    C − 1: the excesses sum to zero, and any C − 1 of them hold all their information). Returns
+    `ref` + L̂ (C,) and Λ⁻¹ (C, C), kPa and kPa²: with a learned reference the radii compare the
+    tyres against their own state at the reset, so the reference's error cancels from the contrasts
+    they pin."""
+    n_c = p.size
+    e0, cov0 = calibration
+    h = _excess_operator(n_c) * np.asarray(radius.gain_per_kpa, dtype=float)[None, :]
+    y = radius.excess[k] - e0
+    r = _excess_cov(_wheel_sd(radius.sigma[k])) + cov0
+    h, y, r = h[:-1], y[:-1], r[:-1, :-1]
+    info_v = np.linalg.inv(rho * (np.outer(sd, sd) + np.outer(ref_sd, ref_sd)))
+    r_inv_h = np.linalg.solve(r, h)
+    cov = np.linalg.inv(info_v + h.T @ r_inv_h)
+    loss = cov @ (info_v @ (p - ref) + r_inv_h.T @ y)
+    return ref + loss, 0.5 * (cov + cov.T)
 
 
 def deflation_warnings(
@@ -166,6 +284,7 @@ def deflation_warnings(
     upper_kpa: np.ndarray | None = None,
     upper_level: float = 0.95,
     tracks: tuple[tuple[int, int], ...] | list = (),
+    radius: RadiusEvidence | None = None,
 ) -> DeflationWarnings:
     r"""Warnings from the monitor's rows: `t_s` (K,), `pressure_kpa`, `sigma_kpa`, `observable` (K, C).
 
@@ -176,7 +295,10 @@ def deflation_warnings(
     upper tail's, :math:`(p_{upper} - \hat p)/\Phi^{-1}(\text{upper\_level})`, instead of σ — with a
     placard reference the probability then reaches `upper_level` exactly when the quantile reaches
     the detection threshold, whatever the posterior's shape. `tracks`: (front, rear) column pairs
-    on one track, for the common fit's error correlation (:class:`DeflationRule`).
+    on one track, for the common fit's error correlation (:class:`DeflationRule`). `radius`: the
+    radius analysis at each row (:class:`RadiusEvidence`), fused with the estimates where every tyre
+    has a reference (``fused_kpa``, ``fused_sigma_kpa``; NaN elsewhere) and the tyre's probability
+    then taken from the fused estimate.
     """
     rule = rule or DeflationRule()
     t = np.asarray(t_s, dtype=float)
@@ -212,6 +334,13 @@ def deflation_warnings(
     streak = np.zeros(n_c, dtype=int)
     w_common = np.zeros(n_c, dtype=bool)
     keep = 1.0 - rule.detect_fraction
+    fused, fused_sd = np.full((n_k, n_c), np.nan), np.full((n_k, n_c), np.nan)
+    if radius is not None:
+        radius.check(n_k, n_c)
+    calibration = None  # radius excess the references go with, and its variance
+    relative = np.full((n_k, n_c), np.nan)
+    w_relative = np.zeros(n_c, dtype=bool)
+    early = None  # learned mode: the radii at radius_learn_s after the reset, their σ, the pressures
     for k in range(n_k):
         step = t[k] - t[k - 1] if k > 0 else 0.0
         if t[k] < reset_at_s:
@@ -228,6 +357,20 @@ def deflation_warnings(
             spread = math.sqrt(spread_p[k, c] ** 2 + (keep * ref_sig[c]) ** 2)
             prob[k, c] = _below(keep * ref_now[c], p[k, c], spread)
             rel[c], rel_sd[c] = p[k, c] / ref_now[c], spread / ref_now[c]
+        informed = np.zeros(n_c, dtype=bool)
+        if radius is not None and placard_kpa is None and np.all(np.isfinite(radius.excess[k])):
+            if early is None and t[k] - reset_at_s >= rule.radius_learn_s:
+                early = (radius.excess[k].copy(), radius.sigma[k].copy(), p[k].copy())
+            if early is not None:
+                relative[k] = _relative_loss(radius, k, early, rule.detect_fraction)
+        if radius is not None and not np.isnan(ref_now).any() and np.all(np.isfinite(radius.excess[k])):
+            if calibration is None:
+                calibration = radius.calibration(k, placard_kpa is not None, rule.radius_spread_permille)
+            fused[k], cov = _fuse_radius(p[k], spread_p[k], rho, ref_now, radius, k, calibration, ref_sig)
+            fused_sd[k] = np.sqrt(np.diag(cov))
+            for c in range(n_c):  # cov is the loss's, p − reference: the reference's σ is in it
+                prob[k, c] = _below(keep * ref_now[c], fused[k, c], fused_sd[k, c])
+            informed[:] = True
         # the common loss is the whole car's: every tyre with a reference observable, three or more
         inside = obs[k] & np.isfinite(rel)
         known = ~np.isnan(ref_now)
@@ -235,21 +378,39 @@ def deflation_warnings(
             common[k] = _common_loss(rel[inside], rel_sd[inside], rho[np.ix_(inside, inside)], keep,
                                      rule.common_alpha)  # fmt: skip
         for c in range(n_c):
-            if np.isnan(ref_now[c]):
+            apart = relative[k, c] >= rule.probability  # NaN: no
+            if np.isnan(ref_now[c]) and np.isnan(relative[k, c]):
                 continue
-            own = prob[k, c] >= rule.probability
+            own = prob[k, c] >= rule.probability  # NaN before the reference: no
             shared = bool(inside[c]) and common[k] >= rule.probability
-            streak[c] = streak[c] + 1 if (obs[k, c] and (own or shared)) else 0
+            counted = obs[k, c] or informed[c] or not np.isnan(relative[k, c])
+            streak[c] = streak[c] + 1 if (counted and (own or shared or apart)) else 0
             if np.isnan(w_time[c]) and streak[c] >= rule.confirm_updates:
-                w_time[c], w_p[c], w_ref[c] = t[k], p[k, c], ref_now[c]
-                w_common[c] = not own
-                w_prob[c] = common[k] if w_common[c] else prob[k, c]
+                w_time[c], w_ref[c] = t[k], ref_now[c]
+                w_p[c] = fused[k, c] if np.isfinite(fused[k, c]) else p[k, c]
+                w_common[c] = shared and not own
+                w_relative[c] = apart and not own and not shared
+                w_prob[c] = prob[k, c] if own else common[k] if shared else relative[k, c]
             warning[k, c] = not np.isnan(w_time[c])
     return DeflationWarnings(
         reference_kpa=ref, probability=prob, warning=warning, warning_time_s=w_time,
         warning_probability=w_prob, warning_pressure_kpa=w_p, warning_reference_kpa=w_ref,
-        common_probability=common, warning_common=w_common,
+        common_probability=common, warning_common=w_common, fused_kpa=fused, fused_sigma_kpa=fused_sd,
+        relative_probability=relative, warning_relative=w_relative,
     )  # fmt: skip
+
+
+def _relative_loss(radius: RadiusEvidence, k: int, early, fraction: float) -> np.ndarray:
+    r"""Per tyre, the probability that it has lost `fraction` of its pressure more than the others'
+    mean since the radii's calibration `early` (their excess, its σ and the pressures then, kPa):
+    a tyre that alone loses ΔL kPa drops its excess by g ΔL, so with the deficit
+    :math:`d_i = e_{0,i} - e_i` (σ from both), :math:`P = \Phi((d_i - g_i f p_{0,i})/\sigma_i)`. Losses the
+    others share lower it (all four alike: 0): it can only under-state a single tyre's loss."""
+    e0, sd0, p0 = early
+    gain = np.asarray(radius.gain_per_kpa, dtype=float)
+    deficit = e0 - radius.excess[k]
+    spread = np.sqrt(sd0**2 + radius.sigma[k] ** 2)
+    return scipy.special.ndtr((deficit - gain * fraction * p0) / spread)
 
 
 def _common_loss(rel: np.ndarray, sd: np.ndarray, rho: np.ndarray, keep: float, alpha: float) -> float:

@@ -13,6 +13,7 @@ start load no numerical library it does not use (``bench/startup.py`` times them
 from __future__ import annotations
 
 import json
+import math
 import os
 import sys
 import warnings
@@ -512,8 +513,9 @@ def monitor_command(
     out: Annotated[
         Path,
         typer.Option("--out", help="Output Parquet: one row per update (every 4 s), per tyre the pressure, "
-                     "its σ, 5 % and 95 % quantiles, flags, the warning's reference, probability and state; "
-                     "the car's common-loss probability."),
+                     "its σ, 5 % and 95 % quantiles, flags, the warning's reference, probability and state, "
+                     "the radius analysis and the pressure fused with it; the car's common-loss "
+                     "probability."),
     ],
     placard: Annotated[
         float | None,
@@ -533,6 +535,15 @@ def monitor_command(
                            "front→rear preview where the two wheels are coherent (--no-preview: each "
                            "tyre on its own).")
     ] = True,
+    radius: Annotated[
+        bool, typer.Option("--radius/--no-radius", help="Fuse the wheel speeds' radius analysis (each tyre's "
+                           "rolling radius against the others') into the warning, where the run has all four "
+                           "wheel speeds, the yaw rate and the accelerations.")
+    ] = True,
+    radius_spread: Annotated[
+        float, typer.Option(help="With --placard: σ of the tyres' rolling radii about the tyre model's, ‰ "
+                            "(0–20; 0 for identical tyres, as the simulator's).")
+    ] = 1.0,
 ) -> None:
     """Monitor all tyres' pressures online (causal, streaming) and warn of deflation (UN R141 / FMVSS 138)."""
     _check_out(out, "--out", (".parquet",))
@@ -541,9 +552,14 @@ def monitor_command(
     names = tuple(c.strip() for c in corners.split(",") if c.strip())
     if not names or len(set(names)) != len(names) or any(c not in ("fl", "fr", "rl", "rr") for c in names):
         raise InputError(f"--corners must list distinct tyres among fl, fr, rl, rr, got {corners!r}")
+    from suvtwin.estimators.deflation import DeflationRule
     from suvtwin.pipeline.monitoring import monitor_run, write_monitor
 
-    result = monitor_run(run, corners=names, placard_kpa=placard, reset_at_s=reset_at, preview=preview)
+    if not (math.isfinite(radius_spread) and 0.0 <= radius_spread <= 20.0):
+        raise InputError(f"--radius-spread must be 0–20 ‰, got {radius_spread}")
+    rule = DeflationRule(radius_spread_permille=radius_spread)
+    result = monitor_run(run, corners=names, placard_kpa=placard, reset_at_s=reset_at, preview=preview,
+                         radius=radius, rule=rule)  # fmt: skip
     write_monitor(result, out)
     last = result.table.iloc[-1] if len(result.table) else None
     typer.echo(f"wrote {out} ({len(result.table)} updates of {', '.join(names)})")
@@ -552,10 +568,13 @@ def monitor_command(
         now = "no estimate yet" if last is None else (
             f"{last[f'{c}_pressure_hat_kpa']:.1f} ± {last[f'{c}_pressure_sigma_kpa']:.1f} kPa"
             + ("" if last[f"{c}_observable"] else " (not observable)")
+            + (f", with the radii {last[f'{c}_fused_pressure_kpa']:.1f} ± {last[f'{c}_fused_sigma_kpa']:.1f}"
+               if math.isfinite(last.get(f"{c}_fused_pressure_kpa", math.nan)) else "")
         )  # fmt: skip
         note = "" if warned is None else (
             f"; WARNING at {warned['t_s']:.1f} s (P = {warned['loss_probability']:.3f}"
-            + (", the car's common loss)" if warned.get("by") == "common loss" else ")")
+            + {"common loss": ", the car's common loss)",
+               "radii against the others": ", its radius against the others')"}.get(warned.get("by"), ")")
         )  # fmt: skip
         typer.echo(f"  {c}: {now}{note}")
 

@@ -227,6 +227,15 @@ def corner_static_travel(corner: str, loads=(), *, vehicle: VehicleParams | None
     return float(suspension_law.static_travel(law, force))
 
 
+def corner_static_load(corner: str, loads=(), *, vehicle: VehicleParams | None = None) -> float:
+    """Static vertical force of the SUV's `corner` tyre on flat ground with extra `loads`
+    (:func:`run_loads`), N: the car's own (:attr:`VehicleParams.static_tire_load`) plus each load's
+    share by its position (:func:`_wheel_load`)."""
+    vehicle = vehicle or load_vehicle()
+    own = float(vehicle.static_tire_load[CORNERS.index(corner)])
+    return own + sum(_wheel_load(vehicle, corner, mass * GRAVITY, x, y) for mass, (x, y, _) in loads)
+
+
 def _wheel_load(vehicle: VehicleParams, corner: str, weight_n: float, x: float, y: float) -> float:
     """The part of a weight (N) at (x, y) m from the chassis CoG (x forward, y left) that `corner`'s
     wheel carries, N: to the axles by the lever arms about them (a1, a2), to an axle's wheels by

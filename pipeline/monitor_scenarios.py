@@ -30,6 +30,10 @@ The sets (what issue 12 asks the monitor to be scored on):
   holds a straight line, and open-loop steering drifts off the strip on rough roads: 27 m in
   120 s at 100 km/h on class D with zero steer), so the weave runs are short and the bench
   reports how far they left the lane.
+- ``reset_leak`` (UN R141's procedure: the system calibrated at nominal pressure, then a loss):
+  all tyres at a placard drawn in 200–250 kPa, which the monitor is not given (it learns the
+  references after a reset at the start); from a time drawn in 150–180 s one tyre (each corner in
+  turn) or, every fifth run, all four lose `loss` (20 %) linearly over 30 s; 40–120 km/h, 300 s.
 
 Loads: a total mass drawn uniformly in 0–300 kg split (flat Dirichlet) over one to three of
 the places where a SUV carries it (front passenger seat, rear seats, boot), positions from the
@@ -66,7 +70,7 @@ __all__ = [
 
 SEED_BASE = 900_000
 """First scenario seed of the bench sets (tests use small seeds)."""
-SETS = ("constant", "slow_leak", "drop", "low_speed", "warning", "nominal_long")
+SETS = ("constant", "slow_leak", "drop", "low_speed", "warning", "nominal_long", "reset_leak")
 """Names of the scenario sets, in the order their seeds are numbered."""
 CLASSES = "ABCD"
 PRESSURE_KPA = (130.0, 230.0)
@@ -232,6 +236,24 @@ def _warning(i: int, duration_s: float = 60.0, loss: float = 0.20) -> BenchRun:
     return BenchRun(name, "warning", _scenario(name, data), info)
 
 
+def _reset_leak(i: int, duration_s: float = 300.0, loss: float = 0.20) -> BenchRun:
+    rng, data, info = _base_run("reset_leak", i, duration_s=duration_s, speed_kmh=(40.0, 120.0))
+    placard = round(float(rng.uniform(*PLACARD_KPA)), 3)
+    deflated = list(CORNERS) if i % 5 == 4 else [CORNERS[i % 5]]
+    start = round(float(rng.uniform(150.0, 180.0)), 3)
+    end = start + 30.0  # the scenario refuses a run that ends before
+    data["pressure_kpa"] = placard
+    low = round(placard * (1.0 - loss), 3)
+    data["pressure_events"] = [
+        {"tire": c, "start_s": start, "end_s": end, "target_kpa": low} for c in deflated
+    ]
+    # the monitor learns the references (no placard_kpa in info: monitor_traces gives none)
+    info.update(nominal_kpa=placard, deflated=deflated, loss=loss, change={"tire": deflated, "start_s": start,
+                                                                          "end_s": end})  # fmt: skip
+    name = f"reset_leak_{i:04d}"
+    return BenchRun(name, "reset_leak", _scenario(name, data), info)
+
+
 def _weave_path(rng: np.random.Generator, v_kmh: float, duration_s: float) -> tuple[list, float, float]:
     """Reference path y(x) (m, from the car's start) of a weave at 0.2–0.4 Hz whose lateral
     acceleration amplitude is 1–4 m/s² but whose lateral swing a_y/ω² stays ≤ 0.7 m, for the
@@ -305,6 +327,7 @@ def scenario_set(
         "drop": lambda i: _drop(i, duration_s or 40.0),
         "warning": lambda i: _warning(i, duration_s or 60.0, loss),
         "nominal_long": lambda i: _nominal_long(i, duration_s or 300.0, weave_every, weave_duration_s),
+        "reset_leak": lambda i: _reset_leak(i, duration_s or 300.0, loss),
     }[set_name]
     return [make(i) for i in range(n_runs)]
 

@@ -18,7 +18,7 @@ false warnings per simulated minute).
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -55,6 +55,9 @@ class MonitorTrace:
     observable, warning : (K, 4) bool flags (warning latched or not);
     loss_probability : (K, 4) or None, the warning's probability of a loss at each update;
     common_probability : (K,) or None, the probability of the car's common loss (NaN where not taken).
+    fused_hat, fused_sigma : (K, 4) or None, the pressure fused with the radius analysis and its σ
+    (NaN where not fused); relative_probability : (K, 4) or None, the radii's probability that the
+    tyre lost more than the others since their calibration (learned references; NaN before).
     """
 
     t_s: np.ndarray
@@ -67,12 +70,17 @@ class MonitorTrace:
     warning: np.ndarray
     loss_probability: np.ndarray | None = None
     common_probability: np.ndarray | None = None
+    fused_hat: np.ndarray | None = None
+    fused_sigma: np.ndarray | None = None
+    relative_probability: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         T, K = np.shape(self.t_s)[0], np.shape(self.t_est)[0]
         for name, shape in (("truth_kpa", (T, 4)), ("speed_mps", (T,)), ("p_hat", (K, 4)),
                             ("sigma", (K, 4)), ("observable", (K, 4)), ("warning", (K, 4)),
-                            ("loss_probability", (K, 4)), ("common_probability", (K,))):  # fmt: skip
+                            ("loss_probability", (K, 4)), ("common_probability", (K,)),
+                            ("fused_hat", (K, 4)), ("fused_sigma", (K, 4)),
+                            ("relative_probability", (K, 4))):  # fmt: skip
             if getattr(self, name) is None:
                 continue
             got = np.shape(getattr(self, name))
@@ -112,6 +120,7 @@ def monitor_trace(run: Mapping, monitor: Mapping) -> MonitorTrace:
     def per_tyre(table: Mapping, suffix: str, what: str, dtype=float) -> np.ndarray:
         return np.stack([col(table, f"{c}_{suffix}", what) for c in CORNERS], axis=1).astype(dtype)
 
+    fused = all(f"{c}_fused_pressure_kpa" in monitor and f"{c}_fused_sigma_kpa" in monitor for c in CORNERS)
     return MonitorTrace(
         t_s=col(run, "t_s", "run").astype(float),
         truth_kpa=per_tyre(run, "pressure_kpa", "run"),
@@ -131,7 +140,24 @@ def monitor_trace(run: Mapping, monitor: Mapping) -> MonitorTrace:
             if "common_loss_probability" in monitor
             else None
         ),
+        fused_hat=per_tyre(monitor, "fused_pressure_kpa", "monitor") if fused else None,
+        fused_sigma=per_tyre(monitor, "fused_sigma_kpa", "monitor") if fused else None,
+        relative_probability=(
+            per_tyre(monitor, "relative_loss_probability", "monitor")
+            if all(f"{c}_relative_loss_probability" in monitor for c in CORNERS)
+            else None
+        ),
     )
+
+
+def fused_view(trace: MonitorTrace) -> MonitorTrace:
+    """The trace with the pressure fused with the radius analysis as its estimate and σ, where fused
+    (the monitor's own elsewhere)."""
+    if trace.fused_hat is None or trace.fused_sigma is None:
+        return trace
+    here = np.isfinite(trace.fused_hat) & np.isfinite(trace.fused_sigma)
+    p_hat = np.where(here, trace.fused_hat, trace.p_hat)
+    return replace(trace, p_hat=p_hat, sigma=np.where(here, trace.fused_sigma, trace.sigma))
 
 
 def truth_at(t_s: np.ndarray, truth: np.ndarray, t_est: np.ndarray) -> np.ndarray:
@@ -331,9 +357,14 @@ def warning_detection(
     names: Sequence[str] | None = None,
     classes: Sequence[str | None] | None = None,
     probability: float = DeflationRule().probability,
+    from_s: Sequence[float] | None = None,
+    loss_start_s: Sequence[float] | None = None,
 ) -> dict:
-    """Deflation warnings on runs whose tyres `deflated[i]` are low from the start: a run is
-    detected when every deflated tyre warns within `window_s` of driving (:func:`driving_time`).
+    """Deflation warnings on runs whose tyres `deflated[i]` are low from the start (or from
+    `from_s[i]`, s: the driving is counted from there, a warning before it counting as at it): a
+    run is detected when every deflated tyre warns within `window_s` of driving
+    (:func:`driving_time`). With `loss_start_s`, a deflated tyre's warning before its loss began is
+    counted with the warnings on inflated tyres (``warnings_before_loss``) and not as a detection.
     Reported overall and for one-tyre and all-four runs, with the driving time to the last needed
     warning (median, max over detected runs) and warnings on tyres that are not deflated; by road
     class when `classes` are given; and each missed run (``missed``: run index or `names[i]`, class,
@@ -345,13 +376,18 @@ def warning_detection(
     ``probability_below``, the others)."""
     if len(traces) != len(deflated):
         raise InputError(f"warning_detection: {len(traces)} traces but {len(deflated)} deflated lists")
-    hit, kind, delay, wrong, missed = [], [], [], 0, []
+    hit, kind, delay, wrong, early, missed = [], [], [], 0, 0, []
     for r, (tr, low) in enumerate(zip(traces, deflated, strict=True)):
         times = warning_times(tr.t_est, tr.warning)
         idx = [CORNERS.index(c) for c in low]
         needed = times[idx]
+        if loss_start_s is not None:
+            before = needed < loss_start_s[r]
+            early += int(before.sum())
+            needed = np.where(before, np.inf, needed)
         if np.all(np.isfinite(needed)):
-            d = driving_time(tr.t_s, tr.speed_mps, float(needed.max()))
+            origin = 0.0 if from_s is None else driving_time(tr.t_s, tr.speed_mps, from_s[r])
+            d = max(driving_time(tr.t_s, tr.speed_mps, float(needed.max())) - origin, 0.0)
             ok = d <= window_s
         else:
             d, ok = float("inf"), False
@@ -372,6 +408,8 @@ def warning_detection(
     out["time_to_warn_s_median"] = float(np.median(found)) if found.size else None
     out["time_to_warn_s_max"] = float(found.max()) if found.size else None
     out["warnings_on_inflated_tyres"] = wrong
+    if loss_start_s is not None:
+        out["warnings_before_loss"] = early
     if classes is not None:
         cls = np.array([str(c) for c in classes])
         out["by_class"] = {
@@ -430,14 +468,17 @@ def false_warnings(
     each onset's evidence (``events``: run index or `names[i]`, tyre, time, estimate, σ, truth).
     Where the traces carry the warning's loss probability, also the margin the rule kept
     (``max_held_probability``): the highest probability any tyre held on `held_updates` consecutive
-    observable updates (the warning rule's confirmation; an unobservable update breaks the run), with
+    updates the rule counts (observable, or fused with the radius analysis: the warning rule's
+    confirmation; another update breaks the run), with
     its run, tyre and time (the last of those updates); where they carry the car's common-loss
     probability, its highest held on `held_updates` consecutive updates where it was taken
-    (``max_held_common_probability``)."""
+    (``max_held_common_probability``); where they carry the radii's relative route, its highest
+    held (``max_held_relative_probability``)."""
     onsets = np.array([int(_rising_edges(tr.warning).sum()) for tr in traces])
     minutes = float(sum(tr.duration_s for tr in traces) / 60.0)
     events = []
     for i, tr in enumerate(traces):
+        tr = fused_view(tr)  # the estimate the warning decided on
         w = np.asarray(tr.warning, bool)
         rise = w & ~np.vstack([np.zeros((1, w.shape[1]), bool), w[:-1]])
         for k, c in zip(*np.nonzero(rise), strict=True):
@@ -456,9 +497,17 @@ def false_warnings(
         "events": events,
     }
     if traces and all(tr.loss_probability is not None for tr in traces):
-        probs = [np.where(np.asarray(tr.observable, bool), np.nan_to_num(tr.loss_probability, nan=0.0), 0.0)
-                 for tr in traces]  # fmt: skip
+        # the rule counts an update where the tyre is observable or its estimate fused with the radii
+        counted = [
+            np.asarray(tr.observable, bool) | (False if tr.fused_hat is None else np.isfinite(tr.fused_hat))
+            for tr in traces
+        ]
+        probs = [np.where(c, np.nan_to_num(tr.loss_probability, nan=0.0), 0.0)
+                 for c, tr in zip(counted, traces, strict=True)]  # fmt: skip
         out["max_held_probability"] = _max_held(probs, traces, names, held_updates, per_tyre=True)
+    if traces and all(tr.relative_probability is not None for tr in traces):
+        probs = [np.nan_to_num(tr.relative_probability, nan=0.0) for tr in traces]
+        out["max_held_relative_probability"] = _max_held(probs, traces, names, held_updates, per_tyre=True)
     if traces and all(tr.common_probability is not None for tr in traces):
         probs = [np.nan_to_num(np.asarray(tr.common_probability, float), nan=0.0)[:, None] for tr in traces]
         out["max_held_common_probability"] = _max_held(probs, traces, names, held_updates, per_tyre=False)
@@ -513,6 +562,17 @@ def score_set(
     out["error_at_by_tyre"] = {
         c: {f"{at:g}s": errors_at(traces, at, tyre=c) for at in (10.0, 30.0)} for c in CORNERS
     }
+    fused_any = traces and all(t.fused_hat is not None for t in traces)
+    if fused_any and any(np.isfinite(t.fused_hat).any() for t in traces):
+        # the same with the radius analysis fused in (the estimate the warning decides on)
+        fused = [fused_view(t) for t in traces]
+        out["fused"] = {
+            "error_at": {f"{at:g}s": errors_at(fused, at) for at in (10.0, 30.0)},
+            "error_at_observable": {
+                f"{at:g}s": errors_at(fused, at, observable_only=True) for at in (10.0, 30.0)
+            },
+            "coverage": coverage(fused, k=2.0, after_s=2.0),
+        }
     classes = [i.get("road_class") for i in infos]
     if all(isinstance(c, str) for c in classes) and traces:
         out["by_class"] = {}
@@ -529,7 +589,7 @@ def score_set(
         out["low_speed"] = low_speed_shares(traces, tol_kpa=tol_kpa)
     elif set_name == "warning":
         out["warning"] = warning_detection(
-            traces,
+            [fused_view(t) for t in traces],  # a miss's estimate and σ: what the warning decided on
             [i["deflated"] for i in infos],
             window_s=60.0,
             names=[str(i.get("name", k)) for k, i in enumerate(infos)],
@@ -545,6 +605,26 @@ def score_set(
                 out["warning_by_window"][f"{window:g}s"] = {
                     k: d[k] for k in ("detected", "one_tyre", "all_four", "warnings_on_inflated_tyres")
                 }
+    elif set_name == "reset_leak":
+        # UN R141's procedure: references learned after the reset, then the loss; warned within 60 s
+        # of driving after the leak ends (and the windows after), none before the leak began
+        deflated = [i["deflated"] for i in infos]
+        ends, starts = [i["change"]["end_s"] for i in infos], [i["change"]["start_s"] for i in infos]
+        out["warning"] = warning_detection(
+            [fused_view(t) for t in traces], deflated, window_s=60.0,
+            names=[str(i.get("name", k)) for k, i in enumerate(infos)],
+            classes=classes if all(isinstance(c, str) for c in classes) else None,
+            from_s=ends, loss_start_s=starts,
+        )  # fmt: skip
+        out["warning_by_window"] = {}
+        for window in (0.0, 30.0, 60.0, 120.0):
+            d = warning_detection(traces, deflated, window_s=window, from_s=ends, loss_start_s=starts)
+            out["warning_by_window"][f"{window:g}s"] = {
+                k: d[k] for k in ("detected", "one_tyre", "all_four", "warnings_on_inflated_tyres",
+                                  "warnings_before_loss")
+            }  # fmt: skip
+        learned = [np.isfinite(t.fused_hat).any() if t.fused_hat is not None else False for t in traces]
+        out["references_learned"] = float(np.mean(learned)) if learned else None
     elif set_name == "nominal_long":
         weave = np.array([bool(i.get("weave")) for i in infos])
         names = [str(i.get("name", k)) for k, i in enumerate(infos)]

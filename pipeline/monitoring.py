@@ -21,14 +21,17 @@ import numpy as np
 import pandas as pd
 
 from suvtwin.errors import InputError
-from suvtwin.estimators.deflation import DeflationRule, deflation_warnings
+from suvtwin.estimators.deflation import DeflationRule, RadiusEvidence, deflation_warnings
 from suvtwin.estimators.monitor import SKIP_REASONS, TAIL_LEVELS, MonitorConfig, MonitorUpdate, TyreMonitor
+from suvtwin.estimators.rolling_radius import RadiusConfig, RollingRadius, excess_of
 from suvtwin.files import atomic_write, read_parquet_table
+from suvtwin.mjcf.tire import effective_rolling_radius, load_tire
 from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
 from suvtwin.pipeline.estimation import (
     check_signals,
     check_time_axis,
     corner_sprung_mass,
+    corner_static_load,
     corner_static_travel,
     full_car_model,
     linear_corner_model,
@@ -39,8 +42,12 @@ from suvtwin.pipeline.estimation import (
 from suvtwin.tire_stiffness import tire_stiffness_of
 
 __all__ = [
-    "CORNER_MODELS", "MonitorResult", "corner_models", "monitor_run", "monitor_signals", "write_monitor",
+    "CORNER_MODELS", "MonitorResult", "RADIUS_COLUMNS", "corner_models", "monitor_run", "monitor_signals",
+    "radius_evidence", "wheel_positions", "write_monitor",
 ]  # fmt: skip
+
+RADIUS_COLUMNS = ("yaw_rate_radps", "lat_accel_mps2", "long_accel_mps2")
+"""Besides each wheel's ``{c}_wheel_speed_radps``, the columns the radius analysis reads."""
 
 _METADATA_KEY = b"suvtwin.monitor"
 
@@ -129,6 +136,53 @@ def monitor_signals(
     return monitor, MonitorUpdate.concatenate(parts)
 
 
+def wheel_positions(vehicle) -> np.ndarray:
+    """The wheel centres fl, fr, rl, rr from the rear axle's centre, (4, 2) m (x forward, y left):
+    what :class:`~suvtwin.estimators.rolling_radius.RollingRadius` takes."""
+    front, rear = vehicle.chassis.track_front / 2, vehicle.chassis.track_rear / 2
+    return np.array([[vehicle.wheelbase, front], [vehicle.wheelbase, -front], [0.0, rear], [0.0, -rear]])
+
+
+def radius_evidence(
+    frame: pd.DataFrame,
+    update_t_s: np.ndarray,
+    *,
+    loads=(),
+    vehicle,
+    tire_file: str | Path | None,
+    placard_kpa: float | None,
+    rule: DeflationRule,
+    config: RadiusConfig | None = None,
+) -> tuple[RadiusEvidence, RollingRadius]:
+    """The radius analysis of a run's four wheels (:class:`~suvtwin.estimators.rolling_radius.RollingRadius`)
+    at the monitor's update times `update_t_s` (the last block ending at or before each), and what the
+    tyre model says of it: each tyre's log radius per kPa (MF-Tyre 6.1's effective rolling radius at
+    the corner's static load, the secant from the reference to the detection threshold; the
+    reference the placard, else the tyre's nominal pressure) and, with a placard, the excess of
+    four tyres at it. `frame`: ``t_s``, ``{c}_wheel_speed_radps`` and :data:`RADIUS_COLUMNS`;
+    `loads`: the extra loads on the chassis (their positions share them among the wheels,
+    :func:`~suvtwin.pipeline.estimation.corner_static_load`)."""
+    t = frame["t_s"].to_numpy(dtype=float)
+    tire = load_tire(tire_file)
+    dt = float(f"{np.median(np.diff(t)):.12g}")
+    analysis = RollingRadius(wheel_positions(vehicle), dt, tire.unloaded_radius, config)
+    rows = analysis.update(
+        t, frame[[f"{c}_wheel_speed_radps" for c in CORNERS]].to_numpy(dtype=float),
+        *(frame[k].to_numpy(dtype=float) for k in RADIUS_COLUMNS),
+    )  # fmt: skip
+    at = np.searchsorted(rows.t_s, np.asarray(update_t_s) + 0.5 * dt, side="right") - 1
+    excess = np.where(at[:, None] >= 0, rows.excess[np.maximum(at, 0)], np.nan)
+    sigma = np.where(at[:, None] >= 0, rows.sigma[np.maximum(at, 0)], np.nan)
+    tp = tire.to_array()
+    wheel_loads = [corner_static_load(c, loads, vehicle=vehicle) for c in CORNERS]
+    ref_pa = (placard_kpa * 1e3) if placard_kpa is not None else tire.nominal_pressure
+    low_pa = (1.0 - rule.detect_fraction) * ref_pa
+    log_re = np.log([[effective_rolling_radius(fz, q, tp) for q in (ref_pa, low_pa)] for fz in wheel_loads])
+    gain = (log_re[:, 0] - log_re[:, 1]) / ((ref_pa - low_pa) / 1e3)
+    expected = excess_of(log_re[:, 0]) if placard_kpa is not None else None
+    return RadiusEvidence(excess=excess, sigma=sigma, gain_per_kpa=gain, expected=expected), analysis
+
+
 def monitor_run(
     path: str | Path,
     *,
@@ -140,6 +194,7 @@ def monitor_run(
     chunk_s: float = 10.0,
     preview: bool = True,
     corner_model: str = "full_car",
+    radius: bool = True,
 ) -> MonitorResult:
     """Run the monitor and the deflation warning on a run file.
 
@@ -154,7 +209,12 @@ def monitor_run(
     shared ``road_level_hat_m3``, ``waviness_hat`` and ``common_loss_probability`` (the observable
     tyres' shared loss, :func:`~suvtwin.estimators.deflation.deflation_warnings`). `preview`: fuse
     each rear tyre with the front→rear preview of its track (:func:`monitor_signals`).
-    `corner_model`: how each corner's spectrum is modelled, :data:`CORNER_MODELS`.
+    `corner_model`: how each corner's spectrum is modelled, :data:`CORNER_MODELS`. `radius`: with all
+    four corners and the run's wheel speeds, yaw rate and accelerations (:data:`RADIUS_COLUMNS`), fuse
+    the radius analysis into the warning (:func:`radius_evidence`; columns
+    ``{c}_radius_excess_permille``, ``{c}_radius_sigma_permille``, ``{c}_fused_pressure_kpa``,
+    ``{c}_fused_sigma_kpa``, and with a learned reference ``{c}_relative_loss_probability``: the
+    tyre against the others since the radii's calibration after the reset).
     """
     unknown = [c for c in corners if c not in CORNERS]
     if unknown or not corners:
@@ -166,7 +226,9 @@ def monitor_run(
     missing = [c for c in needed if c not in table.column_names]
     if missing:
         raise InputError(f"run file {str(path)!r} lacks column(s) {', '.join(missing)}")
-    frame = table.select(needed).to_pandas()
+    wheel = [f"{c}_wheel_speed_radps" for c in CORNERS] + list(RADIUS_COLUMNS)
+    use_radius = radius and tuple(corners) == CORNERS and all(c in table.column_names for c in wheel)
+    frame = table.select(needed + (wheel if use_radius else [])).to_pandas()
     t = frame["t_s"].to_numpy(dtype=float)
     check_time_axis(t, path)
     # a NaN speed is a gap the monitor skips; an accelerometer beyond range is flagged per window
@@ -185,6 +247,12 @@ def monitor_run(
         corner_model=corner_model,
     )  # fmt: skip
     rule = rule or DeflationRule()
+    evidence = None
+    if use_radius:
+        evidence, analysis = radius_evidence(
+            frame, update.t_s, loads=loads, vehicle=run_vehicle(meta), tire_file=tire_file,
+            placard_kpa=placard_kpa, rule=rule,
+        )  # fmt: skip
     warn = deflation_warnings(
         update.t_s, update.pressure_pa / 1e3, update.pressure_sigma_pa / 1e3, update.observable,
         update.speed_mps,
@@ -192,6 +260,7 @@ def monitor_run(
         upper_kpa=update.pressure_upper_pa / 1e3, upper_level=TAIL_LEVELS[1],
         tracks=[(corners.index(f), corners.index(r)) for f, r in (("fl", "rl"), ("fr", "rr"))
                 if f in corners and r in corners],
+        radius=evidence,
     )  # fmt: skip
     columns: dict[str, np.ndarray] = {"t_s": update.t_s, "speed_mps": update.speed_mps}
     for i, c in enumerate(corners):
@@ -207,6 +276,12 @@ def monitor_run(
         columns[f"{c}_spring_rate_npm"] = update.spring_rate[:, i]
         columns[f"{c}_tyre_contact"] = update.tyre_contact[:, i]
         columns[f"{c}_change_probability"] = update.change_probability[:, i]
+        if evidence is not None:
+            columns[f"{c}_radius_excess_permille"] = 1e3 * evidence.excess[:, i]
+            columns[f"{c}_radius_sigma_permille"] = 1e3 * evidence.sigma[:, i]
+            columns[f"{c}_fused_pressure_kpa"] = warn.fused_kpa[:, i]
+            columns[f"{c}_fused_sigma_kpa"] = warn.fused_sigma_kpa[:, i]
+            columns[f"{c}_relative_loss_probability"] = warn.relative_probability[:, i]
     columns["common_loss_probability"] = warn.common_probability
     columns["road_level_hat_m3"] = update.road_level
     columns["waviness_hat"] = update.waviness
@@ -225,6 +300,11 @@ def monitor_run(
         "segments": counts["segments"],
         "segment_status": {r: dict(zip(corners, counts[r].tolist(), strict=True)) for r in SKIP_REASONS},
         "changes": dict(zip(corners, counts["changes"].tolist(), strict=True)),
+        "radius": None if evidence is None else {
+            "config": asdict(analysis.config),
+            "calibration": "tyre model at the placard" if placard_kpa is not None else "learned at the reset",
+            "gain_per_kpa": dict(zip(corners, evidence.gain_per_kpa.tolist(), strict=True)),
+        },
         "warnings": {
             c: (
                 None
@@ -234,7 +314,8 @@ def monitor_run(
                     "loss_probability": float(warn.warning_probability[i]),
                     "pressure_hat_kpa": float(warn.warning_pressure_kpa[i]),
                     "reference_kpa": float(warn.warning_reference_kpa[i]),
-                    "by": "common loss" if warn.warning_common[i] else "own",
+                    "by": ("common loss" if warn.warning_common[i]
+                           else "radii against the others" if warn.warning_relative[i] else "own"),
                 }
             )
             for i, c in enumerate(corners)

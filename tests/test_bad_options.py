@@ -139,6 +139,8 @@ CASES = [
      ["--corners"]),
     ("monitor_reset_outside", lambda d: ["monitor", str(_run_file(d)), "--out", OUT, "--reset-at", "1e6"],
      ["--reset-at"]),
+    ("monitor_radius_spread", lambda d: ["monitor", str(_run_file(d)), "--out", OUT, "--placard", "230",
+                                         "--radius-spread", "-1"], ["--radius-spread"]),
     ("monitor_garbage_run", lambda d: ["monitor", str(_garbage(d)), "--out", OUT], ["run.parquet"]),
     # input-estimate
     ("input_fading", lambda d: ["input-estimate", str(_run_file(d)), "--out", OUT, "--method", "CIE",

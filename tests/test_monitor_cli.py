@@ -37,6 +37,9 @@ def test_monitor_writes_every_tyre_and_warns_against_a_placard(run_file, tmp_pat
         assert (lower < hat).all() and (hat < upper).all()
         assert ((upper - lower) < 2 * 1.7 * frame[f"{c}_pressure_sigma_kpa"]).all()
         assert (frame[f"{c}_reference_kpa"] == 250.0).all()
+        # four equal tyres: the radius analysis finds no tyre apart (the loads' own part, < 0.5 ‰, aside)
+        assert (frame[f"{c}_radius_excess_permille"].abs() < 0.5).all()
+        assert (frame[f"{c}_fused_sigma_kpa"] < frame[f"{c}_pressure_sigma_kpa"]).all()
     meta = json.loads(table.schema.metadata[b"suvtwin.monitor"])
     assert meta["placard_kpa"] == 250.0 and meta["segments"] == 5
     warned = [meta["warnings"][c] for c in ("fl", "fr", "rl", "rr")]

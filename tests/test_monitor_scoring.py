@@ -158,6 +158,25 @@ def test_warning_detection_within_a_window_of_driving():
     assert warning_detection(runs[:1], [["fl"]], window_s=20.0)["detected"] == 0.0
 
 
+def test_warning_detection_after_a_loss_counts_driving_from_its_end_and_early_warnings_as_false():
+    t_s = np.arange(0.0, 300.0, 0.1)
+    t_est = np.arange(0.0, 300.0, 4.0)
+    speed = np.where(t_s < 220.0, 20.0, 0.0)  # parked from 220 s: no driving counted there
+    def warned(at):
+        w = np.zeros((t_est.size, 4), bool)
+        w[t_est >= at, 0] = True
+        return w
+    runs = [_trace(t_s, 180.0, t_est, 180.0, warning=warned(a), speed=speed)
+            for a in (192.0, 172.0, 100.0, 240.0)]  # fmt: skip
+    # the loss from 150 s to 180 s; warned 12 s after its end, during it, before it, 40 s on (parked)
+    out = warning_detection(runs, [["fl"]] * 4, window_s=10.0, from_s=[180.0] * 4, loss_start_s=[150.0] * 4)
+    assert out["detected"] == 0.25  # only the warning during the leak (0 s after its end)
+    assert out["warnings_before_loss"] == 1 and out["warnings_on_inflated_tyres"] == 0
+    out = warning_detection(runs, [["fl"]] * 4, window_s=40.0, from_s=[180.0] * 4, loss_start_s=[150.0] * 4)
+    assert out["detected"] == 0.75  # 12 s and, parked after 220 s, 40 s of driving at 240 s
+    assert out["time_to_warn_s_median"] == pytest.approx(12.0)
+
+
 def test_warning_detection_explains_each_miss():
     """Each missed run names its cause from what its unwarned low tyres showed within the window of
     driving only (a probability reached after 60 s of driving does not count)."""
