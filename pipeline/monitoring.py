@@ -313,7 +313,9 @@ def monitor_run(
                     "t_s": float(warn.warning_time_s[i]),
                     "loss_probability": float(warn.warning_probability[i]),
                     "pressure_hat_kpa": float(warn.warning_pressure_kpa[i]),
-                    "reference_kpa": float(warn.warning_reference_kpa[i]),
+                    # None: warned by the radii before the vibration had learned a reference
+                    "reference_kpa": None if np.isnan(warn.warning_reference_kpa[i])
+                    else float(warn.warning_reference_kpa[i]),
                     "by": ("common loss" if warn.warning_common[i]
                            else "radii against the others" if warn.warning_relative[i] else "own"),
                 }
