@@ -148,10 +148,9 @@ def test_mujoco_wheel_speeds_read_mf_tyre_rolling_radius():
     )  # fmt: skip
     frame = simulate(sc).table
     corners = ("fl", "fr", "rl", "rr")
-    veh = load_vehicle()
-    ch = veh.chassis
-    pos = np.array([[veh.wheelbase, ch.track_front / 2], [veh.wheelbase, -ch.track_front / 2],
-                    [0.0, ch.track_rear / 2], [0.0, -ch.track_rear / 2]])  # fmt: skip
+    from suvtwin.pipeline.monitoring import wheel_positions
+
+    pos = wheel_positions(load_vehicle())
     t = frame["t_s"].to_numpy()
     keep = t >= 4.0  # after the start's speed-up
     w = frame[[f"{c}_wheel_speed_radps" for c in corners]].to_numpy()[keep]
