@@ -89,6 +89,13 @@ def corner_models(
     ]  # fmt: skip
 
 
+def stream_dt(t_s: np.ndarray) -> float:
+    """The sampling interval of a record's time stamps `t_s` (s), to 12 significant digits: float time
+    stamps give medians that differ in the last bits with the record's length, and the estimate at t
+    must not depend on what follows t."""
+    return float(f"{np.median(np.diff(t_s)):.12g}")
+
+
 def monitor_signals(
     t_s: np.ndarray,
     speed_mps: np.ndarray,
@@ -115,9 +122,7 @@ def monitor_signals(
     t = np.asarray(t_s, dtype=float)
     if t.size < 2:
         raise InputError("a run needs at least two samples")
-    # the sampling interval to 12 significant digits: a record's float time stamps give medians that
-    # differ in the last bits with its length, and the estimate at t must not depend on what follows t
-    dt = float(f"{np.median(np.diff(t)):.12g}")
+    dt = stream_dt(t)
     tracks = [(corners.index(f), corners.index(r)) for f, r in (("fl", "rl"), ("fr", "rr"))
               if f in corners and r in corners]  # fmt: skip
     monitor = TyreMonitor(
@@ -164,7 +169,7 @@ def radius_evidence(
     :func:`~suvtwin.pipeline.estimation.corner_static_load`)."""
     t = frame["t_s"].to_numpy(dtype=float)
     tire = load_tire(tire_file)
-    dt = float(f"{np.median(np.diff(t)):.12g}")
+    dt = stream_dt(t)
     analysis = RollingRadius(wheel_positions(vehicle), dt, tire.unloaded_radius, config)
     rows = analysis.update(
         t, frame[[f"{c}_wheel_speed_radps" for c in CORNERS]].to_numpy(dtype=float),
