@@ -63,20 +63,23 @@ observable tyres on, a class D run's front tyre at its placard, read 26 % low at
 beside the low one, was warned: hence all of them, three or more.
 
 **The wheels' rolling radii.** Given the radius analysis (:class:`RadiusEvidence`, from
-:class:`suvtwin.estimators.rolling_radius.RollingRadius`), each row where every tyre has a
-reference fuses it with the vibration estimates (:func:`_fuse_radius`: generalized least squares
-of the four losses p − reference, the vibration estimates and learned references correlated as in
-the common fit, the radius excess linearized about the references, rank three), and the tyre's
-probability is the fused estimate's. The excess is compared against the tyre model at the placard
-within the tyres' spread ``radius_spread_permille`` (placard), or against its own value when the
-references were learned (the calibration at that moment). With learned references the radii are
-also calibrated ``radius_learn_s`` after the reset, and a tyre that has since lost
-``detect_fraction`` more than the others' mean warns on its own (:func:`_relative_loss`,
-``relative_probability``, ``warning_relative``): before the vibration has learned any reference,
-as production wheel-speed systems do after their reset. A row counts for the confirmation where
-the tyre is observable, fused or compared. On the MuJoCo ``warning`` runs (placard, spread 1 ‰):
-warned within 60 s 92 % (one tyre 75 of 80, all four 17 of 20; 88 % without), no warning on an
-inflated tyre; ``nominal_long`` (506 min): no false warning, the highest probability held 0.61;
+:class:`suvtwin.estimators.rolling_radius.RollingRadius`), every row's estimates are fused with it
+against the tyre model within the tyres' spread ``radius_spread_permille``
+(:func:`suvtwin.estimators.radius_fusion.fuse_with_radii`; the vibration estimates' variance grown
+by how far they may lag a change the radii saw, ``RadiusEvidence.lag_kpa``), and with a placard
+reference the tyre's probability is that fused estimate's. With learned references, once every
+tyre has one, the excess is compared against its own value when they were learned (the
+calibration at that moment, which cancels the tyres' own radius offsets; :func:`_fuse_radius`:
+generalized least squares of the four losses p − reference, the vibration estimates and learned
+references correlated as in the common fit, rank three), and the probability is that estimate's.
+With learned references the radii are also calibrated ``radius_learn_s`` after the reset, and a
+tyre that has since lost ``detect_fraction`` more than the others' mean warns on its own
+(:func:`_relative_loss`, ``relative_probability``, ``warning_relative``): before the vibration has
+learned any reference, as production wheel-speed systems do after their reset. A row counts for
+the confirmation where the tyre is observable, fused or compared. On the MuJoCo ``warning`` runs
+(placard, spread 1 ‰, 2026-12-03): warned within 60 s 93 % (one tyre 76 of 80, all four 17 of 20;
+88 % without the radii), no warning on an inflated tyre; ``nominal_long`` (506 min): no false
+warning, the highest probability held 0.55;
 ``reset_leak`` (learned references, a 20 % leak after 150–180 s): one tyre warned within 60 s of
 the leak's end in 31 of 32 runs, none before it.
 
@@ -93,6 +96,14 @@ import numpy as np
 import scipy.special
 
 from suvtwin.errors import InputError
+from suvtwin.estimators.radius_fusion import (
+    RadiusModel,
+    excess_cov,
+    excess_operator,
+    fuse_with_radii,
+    gls_step,
+    wheel_sd,
+)
 
 __all__ = ["DeflationRule", "DeflationWarnings", "RadiusEvidence", "deflation_warnings"]
 
@@ -197,19 +208,25 @@ class RadiusEvidence:
     `excess`, `sigma` (K, C): each tyre's log effective rolling radius over the other tyres' mean
     and its σ (dimensionless) at each row (NaN: none yet); `gain_per_kpa` (C,): the change of the
     tyre's log radius per kPa of its pressure, > 0 (the tyre model's secant from the reference to the
-    detection threshold: exact where the warning decides); `expected` (C,) or None: the excess with
-    every tyre at the placard pressure, from the tyre model at the tyres' loads (None: calibrated
-    at the first row where every tyre has a learned reference).
+    detection threshold: exact where the warning decides), for the learned references' route;
+    `model` or None: each tyre's log radius against its pressure at its load
+    (:class:`~suvtwin.estimators.radius_fusion.RadiusModel`): given, every row's estimates are fused
+    with the radii against it (:func:`~suvtwin.estimators.radius_fusion.fuse_with_radii`, within the
+    tyres' spread), and a placard reference decides on that; `lag_kpa` (K, C) or None: how far the
+    vibration estimate may lag a change the radii saw
+    (:func:`~suvtwin.estimators.radius_fusion.vibration_lag_kpa`), added to its variance in the fusion.
 
-    Linearized, :math:`e - e_0 = A\,G\,(p - p_{ref}) + \varepsilon` with A the excess operator
-    (:func:`suvtwin.estimators.rolling_radius.excess_of`), G = diag(gain): rank C − 1, since a loss
-    shared by all tyres leaves every excess unchanged.
+    With learned references, linearized, :math:`e - e_0 = A\,G\,(p - p_{ref}) + \varepsilon` with A the
+    excess operator (:func:`suvtwin.estimators.rolling_radius.excess_of`), G = diag(gain), e_0 the
+    excess when the references were learned: rank C − 1, since a loss shared by all tyres leaves
+    every excess unchanged.
     """
 
     excess: np.ndarray
     sigma: np.ndarray
     gain_per_kpa: np.ndarray
-    expected: np.ndarray | None = None
+    model: RadiusModel | None = None
+    lag_kpa: np.ndarray | None = None
 
     def check(self, n_k: int, n_c: int) -> None:
         """One clear message for arrays of the wrong shape or a gain that is not positive."""
@@ -218,57 +235,32 @@ class RadiusEvidence:
         gain = np.asarray(self.gain_per_kpa, dtype=float)
         if gain.shape != (n_c,) or not np.all(np.isfinite(gain) & (gain > 0)):
             raise InputError(f"radius gain_per_kpa must be ({n_c},) positive values, got {gain!r}")
-        if self.expected is not None and np.shape(self.expected) != (n_c,):
-            raise InputError(f"radius expected must be ({n_c},), got {np.shape(self.expected)}")
-
-    def calibration(self, k: int, placard: bool, spread_permille: float):
-        """The excess the references go with and its covariance: the model's at the placard with the
-        tyres' spread (placard), else the analysis's own at row `k` (learned at the reset)."""
-        n_c = self.excess.shape[1]
-        if placard and self.expected is not None:
-            return np.asarray(self.expected, dtype=float), _excess_cov(np.full(n_c, spread_permille * 1e-3))
-        return self.excess[k].copy(), _excess_cov(_wheel_sd(self.sigma[k]))
-
-
-def _excess_operator(n_c: int) -> np.ndarray:
-    """A with (A d)_i = d_i − mean of the others' d (C, C)."""
-    return (1.0 + 1.0 / (n_c - 1)) * np.eye(n_c) - np.full((n_c, n_c), 1.0 / (n_c - 1))
-
-
-def _excess_cov(wheel_sd: np.ndarray) -> np.ndarray:
-    """Covariance of the excesses A d of wheel values d independent with σ `wheel_sd` (C,): A diag(σ²) Aᵀ."""
-    a = _excess_operator(wheel_sd.size)
-    return (a * wheel_sd**2) @ a.T
-
-
-def _wheel_sd(excess_sd: np.ndarray) -> np.ndarray:
-    """The wheels' own σ that gives each excess the σ `excess_sd`: var(e_i) = σ²(1 + 1/(C − 1))."""
-    n_c = excess_sd.size
-    return excess_sd * math.sqrt((n_c - 1) / n_c)
+        if self.lag_kpa is not None and np.shape(self.lag_kpa) != (n_k, n_c):
+            raise InputError(f"radius lag_kpa must be ({n_k}, {n_c}), got {np.shape(self.lag_kpa)}")
+        if self.model is not None and self.model.n_tyres != n_c:
+            raise InputError(f"radius model must be for {n_c} tyres, got {self.model.n_tyres}")
 
 
 def _fuse_radius(p, sd, rho, ref, radius: RadiusEvidence, k: int, calibration, ref_sd):
-    r"""The Gaussian fusion of the vibration estimates `p` ± `sd` (C,), kPa, correlated by `rho`, with
-    the radius analysis at row `k` against its `calibration` (e0, its covariance), for the loss
-    L = p − `ref` (the references, ± `ref_sd` correlated as the estimates: learned from them; 0 for
-    a placard): :math:`\Lambda = \Sigma^{-1} + H^T R^{-1} H`, :math:`\hat L = \Lambda^{-1}(\Sigma^{-1}
+    r"""With learned references: the Gaussian fusion of the vibration estimates `p` ± `sd` (C,), kPa,
+    correlated by `rho`, with the radius analysis at row `k` against its `calibration` (e0, its
+    covariance: the excess at the moment the references were learned), for the loss L = p − `ref`
+    (the references, ± `ref_sd` correlated as the estimates: learned from them):
+    :math:`\Lambda = \Sigma^{-1} + H^T R^{-1} H`, :math:`\hat L = \Lambda^{-1}(\Sigma^{-1}
     (\hat p - p_{ref}) + H^T R^{-1} y)`, Σ = Σ_v + Σ_ref, y = e − e0, H = A G, R = A diag(σ_δ²) Aᵀ +
-    cov(e0) (σ_δ the wheels' own σ that gives each excess its σ), on the first C − 1 rows (rank
-    C − 1: the excesses sum to zero, and any C − 1 of them hold all their information). Returns
-    `ref` + L̂ (C,) and Λ⁻¹ (C, C), kPa and kPa²: with a learned reference the radii compare the
-    tyres against their own state at the reset, so the reference's error cancels from the contrasts
-    they pin."""
+    cov(e0) (:func:`suvtwin.estimators.radius_fusion.gls_step`, one step: linear in L). Returns
+    `ref` + L̂ (C,) and Λ⁻¹ (C, C), kPa and kPa²: the radii compare the tyres against their own state
+    at the reset, so the reference's error cancels from the contrasts they pin."""
     n_c = p.size
     e0, cov0 = calibration
-    h = _excess_operator(n_c) * np.asarray(radius.gain_per_kpa, dtype=float)[None, :]
+    h = excess_operator(n_c) * np.asarray(radius.gain_per_kpa, dtype=float)[None, :]
     y = radius.excess[k] - e0
-    r = _excess_cov(_wheel_sd(radius.sigma[k])) + cov0
+    r = excess_cov(wheel_sd(radius.sigma[k])) + cov0
     h, y, r = h[:-1], y[:-1], r[:-1, :-1]
     info_v = np.linalg.inv(rho * (np.outer(sd, sd) + np.outer(ref_sd, ref_sd)))
-    r_inv_h = np.linalg.solve(r, h)
-    cov = np.linalg.inv(info_v + h.T @ r_inv_h)
-    loss = cov @ (info_v @ (p - ref) + r_inv_h.T @ y)
-    return ref + loss, 0.5 * (cov + cov.T)
+    loss0 = p - ref
+    loss, cov = gls_step(loss0, loss0, info_v, h, y - h @ loss0, r)
+    return ref + loss, cov
 
 
 def deflation_warnings(
@@ -335,8 +327,13 @@ def deflation_warnings(
     w_common = np.zeros(n_c, dtype=bool)
     keep = 1.0 - rule.detect_fraction
     fused, fused_sd = np.full((n_k, n_c), np.nan), np.full((n_k, n_c), np.nan)
+    model_fused = None
     if radius is not None:
         radius.check(n_k, n_c)
+        if radius.model is not None:
+            model_fused = fuse_with_radii(p, sig, rho, radius.excess, radius.sigma, radius.model,
+                                          spread_permille=rule.radius_spread_permille,
+                                          lag_kpa=radius.lag_kpa)  # fmt: skip
     calibration = None  # radius excess the references go with, and its variance
     relative = np.full((n_k, n_c), np.nan)
     w_relative = np.zeros(n_c, dtype=bool)
@@ -363,10 +360,19 @@ def deflation_warnings(
                 early = (radius.excess[k].copy(), radius.sigma[k].copy(), p[k].copy())
             if early is not None:
                 relative[k] = _relative_loss(radius, k, early, rule.detect_fraction)
-        if radius is not None and not np.isnan(ref_now).any() and np.all(np.isfinite(radius.excess[k])):
-            if calibration is None:
-                calibration = radius.calibration(k, placard_kpa is not None, rule.radius_spread_permille)
-            fused[k], cov = _fuse_radius(p[k], spread_p[k], rho, ref_now, radius, k, calibration, ref_sig)
+        if model_fused is not None and np.isfinite(model_fused.pressure_kpa[k]).all():
+            # against the tyre model within the tyres' spread: a placard reference decides on it
+            fused[k], fused_sd[k] = model_fused.pressure_kpa[k], model_fused.sigma_kpa[k]
+            if placard_kpa is not None:
+                for c in range(n_c):
+                    prob[k, c] = _below(keep * ref_now[c], fused[k, c], fused_sd[k, c])
+                informed[:] = True
+        learned_all = placard_kpa is None and not np.isnan(ref_now).any()
+        if radius is not None and learned_all and np.all(np.isfinite(radius.excess[k])):
+            if calibration is None:  # the radii as they were when the references were learned
+                calibration = (radius.excess[k].copy(), excess_cov(wheel_sd(radius.sigma[k])))
+            sd_k = sig[k] if radius.lag_kpa is None else np.hypot(sig[k], radius.lag_kpa[k])
+            fused[k], cov = _fuse_radius(p[k], sd_k, rho, ref_now, radius, k, calibration, ref_sig)
             fused_sd[k] = np.sqrt(np.diag(cov))
             for c in range(n_c):  # cov is the loss's, p − reference: the reference's σ is in it
                 prob[k, c] = _below(keep * ref_now[c], fused[k, c], fused_sd[k, c])

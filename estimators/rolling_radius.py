@@ -48,13 +48,16 @@ a block's error against MF-Tyre's R_e at the static loads had an RMS of 0.17 ‰
 scattered less than 2 ‰ (classes A–C), 0.25 at 2–4 ‰, 0.50 at 4–7, 0.92 at 7–10, 2.0 at 10–20 and
 3.9 beyond (class D at speed): the floor and about 0.1 of the scatter beyond it; blocks scattering
 more than ``max_scatter_permille`` are skipped. A block more than ``change_z`` predictive σ from
-the mean is held aside; if the next used block lies within ``change_z`` σ of it, the two start the
-memory afresh (a change of pressure, the road or the load), else it is dropped as an outlier (a
-wheel hopping or spinning on a rough stretch read a class D run's front 11 ‰ small for one block).
-So a drop in pressure is followed within two blocks and a slow leak by the memory's restarts, with
-the estimate never averaging across the change. The state is the last ``memory_blocks`` block
-means per wheel, a held block and the current block's samples: fixed in size, so the cost per
-second of data does not grow.
+the mean is held aside; if the next used block lies within ``change_z`` σ of it, the two start
+every wheel's memory afresh (a change of pressure, the road or the load; one tyre's change moves
+every wheel's excess, by a third of its own on the others, so restarting the changed wheel alone
+left the others' memories averaging across it: after a 230→180 kPa drop the four excesses summed
+to −1.3 ‰ instead of 0 for 20 s), else it is dropped as an outlier (a wheel hopping or spinning on a
+rough stretch read a class D run's front 11 ‰ small for one block). So a drop in pressure is
+followed within two blocks and a slow leak by the memory's restarts, with the estimate never
+averaging across the change. The state is the last ``memory_blocks`` block means per wheel, a
+held block, the last block and the current block's samples: fixed in size, so the cost per second
+of data does not grow.
 
 The excess tells which tyre differs from the others, not by how much all four have lost:
 a loss shared by all four leaves it unchanged (that is the vibration monitor's, :mod:`.monitor`).
@@ -97,7 +100,7 @@ class RadiusConfig:
         Most blocks a wheel's estimate averages (its memory: memory_blocks × block_s seconds).
     change_z : float
         A block this many predictive σ from the current mean is held; confirmed by the next, the
-        two start the memory afresh.
+        two start every wheel's memory afresh.
     prior_block_permille, prior_weight : float
         Prior of a block's scatter, ‰, and its weight in blocks.
     floor_permille : float
@@ -147,8 +150,10 @@ class RadiusUpdate:
     """Rows of finished blocks (K): `t_s` (K,) the block's last sample, s; `excess`, `sigma` (K, C)
     each wheel's log-radius excess over the other three and its σ (dimensionless, 1e-3 = 1 ‰; NaN
     before a first used block); `blocks` (K, C) the blocks the estimate averages; `used` (K,) whether
-    the block was used; `changes` (K, C) whether the block started a wheel's memory afresh (with the
-    block held before it)."""
+    the block was used; `changes` (K, C) whether the block confirmed a change of the wheel (with the
+    block held before it; every wheel's memory then starts afresh); `held` (K, C) a block held aside
+    as a possible change minus the wheel's mean (0: none), as a change it would move the excess by
+    that much."""
 
     t_s: np.ndarray
     excess: np.ndarray
@@ -156,6 +161,7 @@ class RadiusUpdate:
     blocks: np.ndarray
     used: np.ndarray
     changes: np.ndarray
+    held: np.ndarray
 
     @staticmethod
     def concatenate(parts: list[RadiusUpdate], n_c: int) -> RadiusUpdate:
@@ -163,7 +169,7 @@ class RadiusUpdate:
         if not parts:
             e = np.empty((0, n_c))
             return RadiusUpdate(np.empty(0), e, e.copy(), np.empty((0, n_c), int), np.empty(0, bool),
-                                np.empty((0, n_c), bool))  # fmt: skip
+                                np.empty((0, n_c), bool), e.copy())  # fmt: skip
         return RadiusUpdate(**{
             name: np.concatenate([getattr(p, name) for p in parts], axis=0)
             for name in RadiusUpdate.__dataclass_fields__
@@ -184,6 +190,8 @@ class _State:
     part: np.ndarray  # (k, C + 3) the current block's samples so far: excess, counted, a_x, a_y
     pending: np.ndarray  # (C,) a block held as a possible change (NaN: none)
     pending_sd: np.ndarray  # (C,) its samples' scatter
+    last: np.ndarray  # (C,) the last used block's means (NaN: none yet)
+    last_sd: np.ndarray  # (C,) their samples' scatter
     memory: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))  # (M, C) ring of block means
     scatter: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))  # (M, C) their samples' sd
     filled: np.ndarray = field(default_factory=lambda: np.empty(0, int))  # (C,) blocks in memory
@@ -229,6 +237,8 @@ class RollingRadius:
             part=np.empty((0, n_c + 3)),
             pending=np.full(n_c, np.nan),
             pending_sd=np.full(n_c, np.nan),
+            last=np.full(n_c, np.nan),
+            last_sd=np.full(n_c, np.nan),
             memory=np.zeros((self.config.memory_blocks, n_c)),
             scatter=np.zeros((self.config.memory_blocks, n_c)),
             filled=np.zeros(n_c, dtype=int),
@@ -239,7 +249,7 @@ class RollingRadius:
     def state_nbytes(self) -> int:
         """Bytes of state carried between updates (bounded)."""
         s = self._s
-        arrays = (s.part, s.pending, s.pending_sd, s.memory, s.scatter, s.filled, s.head)
+        arrays = (s.part, s.pending, s.pending_sd, s.last, s.last_sd, s.memory, s.scatter, s.filled, s.head)
         return int(sum(a.nbytes for a in arrays))
 
     def sample_excess(self, wheel_speed_radps, yaw_rate_radps):
@@ -300,25 +310,37 @@ class RollingRadius:
         )  # fmt: skip
         changed = np.zeros(n_c, dtype=bool)
         if used:
-            mean, var, n, rough = self._moments()
+            # tested against the memory without its newest block: a block the change fell within
+            # (partly before, partly after) would otherwise widen the prediction it is tested against
+            mean, var, n, rough = self._moments(skip_newest=True)
             model2 = (cfg.floor_permille * 1e-3) ** 2 + (cfg.roughness_share * np.maximum(rough, sd)) ** 2
             pred = np.sqrt(var * (1.0 + 1.0 / np.maximum(n, 1)) + model2)
             out = (n > 0) & (np.abs(x - mean) > cfg.change_z * pred)
             # a second block beside the one held: a change (both start the memory); else held
             changed = out & (np.abs(x - s.pending) <= cfg.change_z * np.sqrt(2.0 * var + model2))
-            s.filled[changed] = 0
-            for c in np.flatnonzero(changed):
-                self._add(c, s.pending[c], s.pending_sd[c])
-            for c in np.flatnonzero(~out | changed):
-                self._add(c, x[c], sd[c])
-            s.pending = np.where(out & ~changed, x, np.nan)
-            s.pending_sd = np.where(out & ~changed, sd, np.nan)
+            if changed.any():
+                # one wheel's change moves every wheel's excess (the others' mean holds it): every
+                # memory starts afresh from the two blocks since
+                s.filled[:] = 0
+                for c in range(n_c):
+                    if np.isfinite(s.last[c]):
+                        self._add(c, s.last[c], s.last_sd[c])
+                    self._add(c, x[c], sd[c])
+                s.pending = np.full(n_c, np.nan)
+                s.pending_sd = np.full(n_c, np.nan)
+            else:
+                for c in np.flatnonzero(~out):
+                    self._add(c, x[c], sd[c])
+                s.pending = np.where(out, x, np.nan)
+                s.pending_sd = np.where(out, sd, np.nan)
+            s.last, s.last_sd = x.copy(), sd.copy()
         mean, var, n, rough = self._moments()
         model2 = (cfg.floor_permille * 1e-3) ** 2 + (cfg.roughness_share * rough) ** 2
         sigma = np.where(n > 0, np.sqrt(var / np.maximum(n, 1) + model2), np.nan)
         return RadiusUpdate(
             t_s=np.array([t_end]), excess=np.where(n > 0, mean, np.nan)[None], sigma=sigma[None],
             blocks=n[None].copy(), used=np.array([used]), changes=changed[None],
+            held=np.where(np.isfinite(s.pending) & (n > 0), s.pending - mean, 0.0)[None],
         )  # fmt: skip
 
     def _add(self, c: int, value: float, scatter: float) -> None:
@@ -329,9 +351,10 @@ class RollingRadius:
         s.head[c] = (s.head[c] + 1) % self.config.memory_blocks
         s.filled[c] = min(s.filled[c] + 1, self.config.memory_blocks)
 
-    def _moments(self):
+    def _moments(self, skip_newest: bool = False):
         """Each wheel's mean over its memory, the blocks' shrunk variance s², the count n and the
-        blocks' mean sample scatter."""
+        blocks' mean sample scatter (`skip_newest`: without the newest block where it holds two or
+        more)."""
         cfg = self.config
         s = self._s
         m = cfg.memory_blocks
@@ -339,6 +362,10 @@ class RollingRadius:
         # the last n blocks of each wheel's ring: slot j is (head − 1 − j) mod M blocks old
         age = (s.head[None, :] - 1 - np.arange(m)[:, None]) % m
         mask = age < n[None, :]
+        if skip_newest:
+            skip = n >= 2
+            mask &= ~((age == 0) & skip[None, :])
+            n = n - skip
         total = np.where(mask, s.memory, 0.0).sum(axis=0)
         mean = total / np.maximum(n, 1)
         ss = np.where(mask, (s.memory - mean) ** 2, 0.0).sum(axis=0)

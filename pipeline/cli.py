@@ -536,13 +536,14 @@ def monitor_command(
                            "tyre on its own).")
     ] = True,
     radius: Annotated[
-        bool, typer.Option("--radius/--no-radius", help="Fuse the wheel speeds' radius analysis (each tyre's "
-                           "rolling radius against the others') into the warning, where the run has all four "
-                           "wheel speeds, the yaw rate and the accelerations.")
+        bool, typer.Option("--radius/--no-radius", help="Fuse the wheel speeds' radius analysis (each "
+                           "tyre's rolling radius against the others') with the pressures and the warning, "
+                           "where the run has all four wheel speeds, the yaw rate and the accelerations.")
     ] = True,
     radius_spread: Annotated[
-        float, typer.Option(help="With --placard: σ of the tyres' rolling radii about the tyre model's, ‰ "
-                            "(0–20; 0 for identical tyres, as the simulator's).")
+        float, typer.Option(help="σ of the tyres' rolling radii about the tyre model's, ‰ (0–20; 0 for "
+                            "identical tyres, as the simulator's): the fused pressures before learned "
+                            "references calibrate the radii, and with --placard the warning.")
     ] = 1.0,
 ) -> None:
     """Monitor all tyres' pressures online (causal, streaming) and warn of deflation (UN R141 / FMVSS 138)."""

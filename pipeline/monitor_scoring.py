@@ -573,6 +573,10 @@ def score_set(
             },
             "coverage": coverage(fused, k=2.0, after_s=2.0),
         }
+        if set_name in ("slow_leak", "drop"):
+            out["fused"]["change"] = change_tracking(fused, [i["change"] for i in infos], tol_kpa=tol_kpa)
+        elif set_name == "low_speed":
+            out["fused"]["low_speed"] = low_speed_shares(fused, tol_kpa=tol_kpa)
     classes = [i.get("road_class") for i in infos]
     if all(isinstance(c, str) for c in classes) and traces:
         out["by_class"] = {}
@@ -623,7 +627,11 @@ def score_set(
                 k: d[k] for k in ("detected", "one_tyre", "all_four", "warnings_on_inflated_tyres",
                                   "warnings_before_loss")
             }  # fmt: skip
-        learned = [np.isfinite(t.fused_hat).any() if t.fused_hat is not None else False for t in traces]
+        # every tyre's reference learned at some update: each then has a loss probability
+        learned = [
+            t.loss_probability is not None and bool(np.isfinite(t.loss_probability).all(axis=1).any())
+            for t in traces
+        ]
         out["references_learned"] = float(np.mean(learned)) if learned else None
     elif set_name == "nominal_long":
         weave = np.array([bool(i.get("weave")) for i in infos])
@@ -641,7 +649,16 @@ def _target(value, op: str, bound: float) -> dict:
 
 
 def issue_targets(set_name: str, scores: dict) -> dict:
-    """The issue's 'done when' numbers for this set, with the measured value and whether it is met."""
+    """The issue's 'done when' numbers for this set, with the measured value and whether it is met:
+    on the vibration monitor's estimate and, where the scores have a ``fused`` block (the radii fused
+    in), on that too (``with_radii``)."""
+    out = _targets(set_name, scores)
+    if "fused" in scores and set_name in ("constant", "slow_leak", "drop", "low_speed"):
+        out["with_radii"] = _targets(set_name, {**scores, **scores["fused"]})
+    return out
+
+
+def _targets(set_name: str, scores: dict) -> dict:
     e10, e30 = scores["error_at"]["10s"], scores["error_at"]["30s"]
     cov = scores["coverage"]["inside"]
     out = {}

@@ -23,7 +23,8 @@ import pandas as pd
 from suvtwin.errors import InputError
 from suvtwin.estimators.deflation import DeflationRule, RadiusEvidence, deflation_warnings
 from suvtwin.estimators.monitor import SKIP_REASONS, TAIL_LEVELS, MonitorConfig, MonitorUpdate, TyreMonitor
-from suvtwin.estimators.rolling_radius import RadiusConfig, RollingRadius, excess_of
+from suvtwin.estimators.radius_fusion import RadiusModel, vibration_lag_kpa
+from suvtwin.estimators.rolling_radius import RadiusConfig, RollingRadius
 from suvtwin.files import atomic_write, read_parquet_table
 from suvtwin.mjcf.tire import effective_rolling_radius, load_tire
 from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
@@ -48,6 +49,9 @@ __all__ = [
 
 RADIUS_COLUMNS = ("yaw_rate_radps", "lat_accel_mps2", "long_accel_mps2")
 """Besides each wheel's ``{c}_wheel_speed_radps``, the columns the radius analysis reads."""
+
+RADIUS_MODEL_GRID_KPA = np.arange(50.0, 452.0, 2.0)
+"""Pressures at which the tyre model's effective rolling radius is tabulated for the radius fusion, kPa."""
 
 _METADATA_KEY = b"suvtwin.monitor"
 
@@ -163,8 +167,10 @@ def radius_evidence(
     at the monitor's update times `update_t_s` (the last block ending at or before each), and what the
     tyre model says of it: each tyre's log radius per kPa (MF-Tyre 6.1's effective rolling radius at
     the corner's static load, the secant from the reference to the detection threshold; the
-    reference the placard, else the tyre's nominal pressure) and, with a placard, the excess of
-    four tyres at it. `frame`: ``t_s``, ``{c}_wheel_speed_radps`` and :data:`RADIUS_COLUMNS`;
+    reference the placard, else the tyre's nominal pressure; for the learned references' route) and
+    each tyre's log radius at its load on :data:`RADIUS_MODEL_GRID_KPA` (the model the estimates are
+    fused against, :func:`~suvtwin.estimators.radius_fusion.fuse_with_radii`). `frame`: ``t_s``,
+    ``{c}_wheel_speed_radps`` and :data:`RADIUS_COLUMNS`;
     `loads`: the extra loads on the chassis (their positions share them among the wheels,
     :func:`~suvtwin.pipeline.estimation.corner_static_load`)."""
     t = frame["t_s"].to_numpy(dtype=float)
@@ -177,15 +183,25 @@ def radius_evidence(
     )  # fmt: skip
     at = np.searchsorted(rows.t_s, np.asarray(update_t_s) + 0.5 * dt, side="right") - 1
     excess = np.where(at[:, None] >= 0, rows.excess[np.maximum(at, 0)], np.nan)
-    sigma = np.where(at[:, None] >= 0, rows.sigma[np.maximum(at, 0)], np.nan)
+    # a block held aside as a possible change: that wheel's estimate may be its mean or the block, and
+    # the others' memories, which took the same block in, may hold 1/(C − 1) of its step
+    held = np.abs(np.where(at[:, None] >= 0, rows.held[np.maximum(at, 0)], 0.0))
+    n_c = len(CORNERS)
+    held = held + (held.sum(axis=1, keepdims=True) - held) / (n_c - 1)
+    sigma = np.hypot(np.where(at[:, None] >= 0, rows.sigma[np.maximum(at, 0)], np.nan), held)
     tp = tire.to_array()
     wheel_loads = [corner_static_load(c, loads, vehicle=vehicle) for c in CORNERS]
     ref_pa = (placard_kpa * 1e3) if placard_kpa is not None else tire.nominal_pressure
     low_pa = (1.0 - rule.detect_fraction) * ref_pa
     log_re = np.log([[effective_rolling_radius(fz, q, tp) for q in (ref_pa, low_pa)] for fz in wheel_loads])
     gain = (log_re[:, 0] - log_re[:, 1]) / ((ref_pa - low_pa) / 1e3)
-    expected = excess_of(log_re[:, 0]) if placard_kpa is not None else None
-    return RadiusEvidence(excess=excess, sigma=sigma, gain_per_kpa=gain, expected=expected), analysis
+    grid = RADIUS_MODEL_GRID_KPA
+    model = RadiusModel(
+        pressure_kpa=grid,
+        log_radius=np.log([[effective_rolling_radius(fz, 1e3 * q, tp) for q in grid] for fz in wheel_loads]),
+    )
+    lag = vibration_lag_kpa(rows.t_s - 0.5 * dt, rows.excess, rows.changes, gain, update_t_s, held=rows.held)
+    return RadiusEvidence(excess=excess, sigma=sigma, gain_per_kpa=gain, model=model, lag_kpa=lag), analysis
 
 
 def monitor_run(
@@ -216,9 +232,11 @@ def monitor_run(
     each rear tyre with the front→rear preview of its track (:func:`monitor_signals`).
     `corner_model`: how each corner's spectrum is modelled, :data:`CORNER_MODELS`. `radius`: with all
     four corners and the run's wheel speeds, yaw rate and accelerations (:data:`RADIUS_COLUMNS`), fuse
-    the radius analysis into the warning (:func:`radius_evidence`; columns
-    ``{c}_radius_excess_permille``, ``{c}_radius_sigma_permille``, ``{c}_fused_pressure_kpa``,
-    ``{c}_fused_sigma_kpa``, and with a learned reference ``{c}_relative_loss_probability``: the
+    the radius analysis with the pressures (:func:`radius_evidence`; columns
+    ``{c}_radius_excess_permille``, ``{c}_radius_sigma_permille``, ``{c}_fused_pressure_kpa`` and
+    ``{c}_fused_sigma_kpa``: the pressure with the radii, against the tyre model within the tyres'
+    spread, or once learned references are known against the radii when they were learned; the
+    warning decides on it; and with a learned reference ``{c}_relative_loss_probability``: the
     tyre against the others since the radii's calibration after the reset).
     """
     unknown = [c for c in corners if c not in CORNERS]

@@ -158,6 +158,7 @@ def test_report_is_self_contained_with_goals_and_figures(finished):
     monitor = json.loads((out / "monitor.json").read_text())
     assert set(monitor) == {"slow_leak", "warning"}
     assert monitor["slow_leak"]["scores"]["runs"] == 1 and "settle_s_max" in monitor["slow_leak"]["targets"]
+    assert "settle_s_max" in monitor["slow_leak"]["targets"]["with_radii"]  # the radii fused in
     assert monitor["warning"]["targets"]["detected_within_60s"]["value"] in (0.0, 1.0)
     example = monitor["slow_leak"]["example"]
     assert example["truth_kpa"][0] > example["truth_kpa"][-1]  # the leaking tyre's true pressure falls

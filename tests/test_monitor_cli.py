@@ -47,6 +47,18 @@ def test_monitor_writes_every_tyre_and_warns_against_a_placard(run_file, tmp_pat
     assert "WARNING" in capsys.readouterr().out
 
 
+def test_monitor_without_a_reference_fuses_the_radii_against_the_tyre_model(run_file, tmp_path):
+    out = tmp_path / "monitor.parquet"
+    assert main(["monitor", str(run_file), "--out", str(out)]) == 0
+    frame = pq.read_table(out).to_pandas()
+    for c in ("fl", "fr", "rl", "rr"):
+        fused, sigma = frame[f"{c}_fused_pressure_kpa"], frame[f"{c}_fused_sigma_kpa"]
+        # from the first radius block on (4 s): four equal tyres at 180 kPa, within 3σ
+        assert np.isfinite(fused).all() and (sigma > 0).all()
+        assert (np.abs(fused - 180.0) < 3 * sigma).all()
+        assert frame[f"{c}_reference_kpa"].isna().all()  # 20 s: no reference learned, no warning
+
+
 def test_online_estimate_tolerates_a_gap(run_file, tmp_path, capsys):
     frame = pq.read_table(run_file).to_pandas()
     frame.loc[3000:3500, "fl_accel_unsprung_mps2"] = np.nan

@@ -77,7 +77,7 @@ def test_chunking_does_not_change_the_result_and_the_state_is_bounded():
     ra = RollingRadius(POS, 0.01, R0, cfg)
     parts = [ra.update(t[i : i + 777], w[i : i + 777], yaw[i : i + 777], np.zeros(777)[: min(777, n - i)],
                        np.zeros(777)[: min(777, n - i)]) for i in range(0, n, 777)]  # fmt: skip
-    for name in ("t_s", "excess", "sigma", "blocks", "used"):
+    for name in ("t_s", "excess", "sigma", "blocks", "used", "changes", "held"):
         np.testing.assert_array_equal(np.concatenate([getattr(p, name) for p in parts]), getattr(whole, name))
     # the memory's 5 blocks and at most one block's samples (400 × (4 + 3))
     assert whole.blocks.max() == 5 and ra.state_nbytes <= 400 * 7 * 8 + 1000
@@ -106,6 +106,29 @@ def test_a_drop_starts_the_memory_afresh():
     assert not rows.changes[: k + 1].any() and abs(rows.excess[k, 3]) < 0.3e-3
     assert rows.changes[k + 1, 3] and rows.blocks[k + 1, 3] == 2  # confirmed by the next
     assert abs(rows.excess[k + 1, 3] + 4e-3) < 0.3e-3  # follows within two blocks
+
+
+def test_a_drop_within_a_block_restarts_every_wheel_and_the_excesses_stay_consistent():
+    """The rear right loses 4 ‰ of radius 2 s into a 4 s block: that block reads half the drop and is
+    no change; the next is held (its step shown in `held`), the one after confirms it, and from then
+    on every wheel reads the new radii (the others +4/3 ‰: one wheel's drop over three), the four
+    excesses summing to 0 (with the changed wheel alone restarted, the others' memories averaged
+    across the drop)."""
+    n = 8000
+    radii = np.tile(np.full(4, R0), (n, 1))
+    radii[4200:, 3] *= 1 - 4e-3
+    rng = np.random.default_rng(4)
+    w = _wheel_speeds(radii, np.full(n, 25.0), np.zeros(n)) * (1 + 1e-3 * rng.standard_normal((n, 4)))
+    rows = RollingRadius(POS, 0.01, R0).update(np.arange(n) * 0.01, w, np.zeros(n), np.zeros(n), np.zeros(n))
+    k = np.searchsorted(rows.t_s, 43.0)  # the block 40–44 s, the drop at 42 s inside it
+    truth = excess_of(np.log([1.0, 1.0, 1.0, 1 - 4e-3]))
+    assert not rows.changes[: k + 2].any()
+    # the block after it is held: the change it would be shows, beside an unchanged estimate
+    assert abs(rows.held[k + 1, 3] - (truth[3] - rows.excess[k + 1, 3])) < 0.5e-3
+    assert rows.changes[k + 2, 3] and np.all(rows.blocks[k + 2] == 2) and np.all(rows.held[k + 2] == 0.0)
+    after = rows.excess[k + 2 :]
+    np.testing.assert_allclose(after, np.tile(truth, (len(after), 1)), atol=0.3e-3)
+    np.testing.assert_allclose(after.sum(axis=1), 0.0, atol=1e-12)
 
 
 def test_one_block_apart_is_an_outlier_not_a_change():
@@ -169,11 +192,18 @@ def test_mujoco_wheel_speeds_read_mf_tyre_rolling_radius():
 
 
 # ------------------------------------------------------------------ fused into the warning
-def _evidence(n_k, excess, sigma, gain=0.1e-3, expected=None):
+def _evidence(n_k, excess, sigma, gain=0.1e-3, placard=None):
+    """Radius evidence at `n_k` rows; with `placard` (kPa), a tyre model linear in the pressure with
+    slope `gain` per kPa, equal at the placard for all four."""
     from suvtwin.estimators.deflation import RadiusEvidence
+    from suvtwin.estimators.radius_fusion import RadiusModel
 
+    model = None
+    if placard is not None:
+        grid = np.arange(50.0, 452.0, 2.0)
+        model = RadiusModel(pressure_kpa=grid, log_radius=np.tile(gain * (grid - placard), (4, 1)))
     return RadiusEvidence(excess=np.tile(excess, (n_k, 1)), sigma=np.tile(sigma, (n_k, 1)),
-                          gain_per_kpa=np.full(4, gain), expected=expected)  # fmt: skip
+                          gain_per_kpa=np.full(4, gain), model=model)  # fmt: skip
 
 
 def test_fusion_reads_one_tyre_from_the_radii_where_the_others_are_known():
@@ -188,7 +218,7 @@ def test_fusion_reads_one_tyre_from_the_radii_where_the_others_are_known():
     p = np.full((n_k, 4), 230.0)
     sig = np.tile([0.5, 0.5, 0.5, 80.0], (n_k, 1))
     rule = DeflationRule(radius_spread_permille=0.0, common_alpha=None)
-    ev = _evidence(n_k, excess, np.full(4, 0.05e-3), gain, np.zeros(4))
+    ev = _evidence(n_k, excess, np.full(4, 0.05e-3), gain, placard=230.0)
     obs = np.ones((n_k, 4), bool)
     w = deflation_warnings(np.arange(n_k) * 4.0, p, sig, obs, placard_kpa=230.0, rule=rule, radius=ev)
     np.testing.assert_allclose(w.fused_kpa[-1], [230, 230, 230, 190], atol=0.5)
@@ -217,14 +247,14 @@ def test_fusion_is_blind_to_a_loss_all_four_share_and_honest_in_monte_carlo():
         spread = 1e-3 * rng.standard_normal(4)  # the tyres' own radii about the model's
         # the wheels' own noise, σ_e·√(3/4) each, gives each excess σ_e
         excess = a @ (gain * (truth - 230.0) + spread + sig_e * np.sqrt(0.75) * rng.standard_normal(4))
+        ev = _evidence(1, excess, np.full(4, sig_e), gain, placard=230.0)
         w = deflation_warnings([0.0], p_hat[None], np.full((1, 4), sig_v), np.ones((1, 4), bool),
-                               placard_kpa=230.0, rule=rule, tracks=tracks,
-                               radius=_evidence(1, excess, np.full(4, sig_e), gain, np.zeros(4)))  # fmt: skip
+                               placard_kpa=230.0, rule=rule, tracks=tracks, radius=ev)  # fmt: skip
         z.append((w.fused_kpa[0] - truth) / w.fused_sigma_kpa[0])
     z = np.array(z)
     assert np.all(np.abs(z.mean(axis=0)) < 0.15) and np.all(np.abs(z.std(axis=0) - 1.0) < 0.1)
     # a loss shared by all four: the radii say nothing, the fused mean stays the vibration's
-    ev = _evidence(1, np.zeros(4), np.full(4, sig_e), gain, np.zeros(4))
+    ev = _evidence(1, np.zeros(4), np.full(4, sig_e), gain, placard=230.0)
     w = deflation_warnings([0.0], np.full((1, 4), 180.0), np.full((1, 4), sig_v), np.ones((1, 4), bool),
                            placard_kpa=230.0, rule=rule, tracks=tracks, radius=ev)  # fmt: skip
     np.testing.assert_allclose(w.fused_kpa[0], 180.0, atol=1e-6)

@@ -204,7 +204,10 @@ def _monitor_html(monitor: dict) -> list[str]:
     ]
     rows = []
     for name, study in monitor.items():
-        for target, cell in study["targets"].items():
+        # the vibration estimate's targets, then the same with the wheels' radii fused in (with_radii)
+        cells = [(t, c) for t, c in study["targets"].items() if t != "with_radii"]
+        cells += [(f"with the radii: {t}", c) for t, c in study["targets"].get("with_radii", {}).items()]
+        for target, cell in cells:
             value = cell["value"]
             rows.append({"set": name, "target": target, "value": "—" if value is None else value,
                          "required": cell["target"], "met": "yes" if cell["met"] else "no"})  # fmt: skip
