@@ -54,10 +54,14 @@ every wheel's excess, by a third of its own on the others, so restarting the cha
 left the others' memories averaging across it: after a 230→180 kPa drop the four excesses summed
 to −1.3 ‰ instead of 0 for 20 s), else it is dropped as an outlier (a wheel hopping or spinning on a
 rough stretch read a class D run's front 11 ‰ small for one block). So a drop in pressure is
-followed within two blocks and a slow leak by the memory's restarts, with the estimate never
-averaging across the change. The state is the last ``memory_blocks`` block means per wheel, a
-held block, the last block and the current block's samples: fixed in size, so the cost per second
-of data does not grow.
+followed within two blocks, with the estimate never averaging across the change. A slow leak
+moves the blocks a little each time, none far enough to be a change, and the memory's mean would
+trail the ramp by half its length: where the straight line through a wheel's blocks has a slope
+beyond ``trend_z`` σ, every wheel's estimate is its line's value at the newest block, with the
+line's σ there (a ramp of 0.12 ‰/s is followed within 0.5 ‰ instead of 1.4 ‰ behind, and the
+fused ``slow_leak`` runs' ±2σ coverage went from 88 % to 98.5 %). The state is the last
+``memory_blocks`` block means per wheel, a held block, the last block and the current block's
+samples: fixed in size, so the cost per second of data does not grow.
 
 The excess tells which tyre differs from the others, not by how much all four have lost:
 a loss shared by all four leaves it unchanged (that is the vibration monitor's, :mod:`.monitor`).
@@ -110,6 +114,12 @@ class RadiusConfig:
         the speed), added to σ over the memory's mean scatter.
     max_scatter_permille : float
         A block whose samples scatter more than this (any wheel), ‰, is skipped.
+    trend_z : float or None
+        A wheel's straight line through its memory's blocks whose slope is this many σ from 0 (a
+        ramp: a slow leak) makes every wheel's estimate the line's value at the newest block
+        instead of the memory's mean (None: never).
+    trend_min_blocks : int
+        Fewest blocks a significant slope needs.
     """
 
     block_s: float = 4.0
@@ -124,6 +134,8 @@ class RadiusConfig:
     floor_permille: float = 0.17
     roughness_share: float = 0.10
     max_scatter_permille: float = 10.0
+    trend_z: float | None = 3.0
+    trend_min_blocks: int = 4
 
     def __post_init__(self) -> None:
         checks = [
@@ -139,6 +151,8 @@ class RadiusConfig:
             ("floor_permille", self.floor_permille >= 0.0, "≥ 0"),
             ("roughness_share", 0.0 <= self.roughness_share <= 1.0, "0–1"),
             ("max_scatter_permille", self.max_scatter_permille > 0.0, "> 0"),
+            ("trend_z", self.trend_z is None or self.trend_z > 0.0, "> 0 or None"),
+            ("trend_min_blocks", 3 <= self.trend_min_blocks <= 10_000, "3–10000"),
         ]
         for name, ok, allowed in checks:
             if not ok:
@@ -153,7 +167,8 @@ class RadiusUpdate:
     the block was used; `changes` (K, C) whether the block confirmed a change of the wheel (with the
     block held before it; every wheel's memory then starts afresh); `held` (K, C) a block held aside
     as a possible change minus the wheel's mean (0: none), as a change it would move the excess by
-    that much."""
+    that much; `trend` (K, C) the excess's slope, 1/s, where the estimate follows a significant ramp
+    (0 elsewhere)."""
 
     t_s: np.ndarray
     excess: np.ndarray
@@ -162,6 +177,7 @@ class RadiusUpdate:
     used: np.ndarray
     changes: np.ndarray
     held: np.ndarray
+    trend: np.ndarray
 
     @staticmethod
     def concatenate(parts: list[RadiusUpdate], n_c: int) -> RadiusUpdate:
@@ -169,7 +185,7 @@ class RadiusUpdate:
         if not parts:
             e = np.empty((0, n_c))
             return RadiusUpdate(np.empty(0), e, e.copy(), np.empty((0, n_c), int), np.empty(0, bool),
-                                np.empty((0, n_c), bool), e.copy())  # fmt: skip
+                                np.empty((0, n_c), bool), e.copy(), e.copy())  # fmt: skip
         return RadiusUpdate(**{
             name: np.concatenate([getattr(p, name) for p in parts], axis=0)
             for name in RadiusUpdate.__dataclass_fields__
@@ -336,11 +352,21 @@ class RollingRadius:
             s.last, s.last_sd = x.copy(), sd.copy()
         mean, var, n, rough = self._moments()
         model2 = (cfg.floor_permille * 1e-3) ** 2 + (cfg.roughness_share * rough) ** 2
-        sigma = np.where(n > 0, np.sqrt(var / np.maximum(n, 1) + model2), np.nan)
+        held = np.where(np.isfinite(s.pending) & (n > 0), s.pending - mean, 0.0)
+        value, spread = mean, var / np.maximum(n, 1)
+        slope = np.zeros(n_c)
+        if cfg.trend_z is not None:
+            level, level_var, rate, significant = self._trend()
+            if significant.any():  # one wheel's ramp moves every excess: all extrapolated, or none
+                fit = n >= 3
+                value = np.where(fit, level, mean)
+                spread = np.where(fit, level_var, spread)
+                slope = np.where(fit, rate / cfg.block_s, 0.0)
+        sigma = np.where(n > 0, np.sqrt(spread + model2), np.nan)
         return RadiusUpdate(
-            t_s=np.array([t_end]), excess=np.where(n > 0, mean, np.nan)[None], sigma=sigma[None],
-            blocks=n[None].copy(), used=np.array([used]), changes=changed[None],
-            held=np.where(np.isfinite(s.pending) & (n > 0), s.pending - mean, 0.0)[None],
+            t_s=np.array([t_end]), excess=np.where(n > 0, value, np.nan)[None], sigma=sigma[None],
+            blocks=n[None].copy(), used=np.array([used]), changes=changed[None], held=held[None],
+            trend=slope[None],
         )  # fmt: skip
 
     def _add(self, c: int, value: float, scatter: float) -> None:
@@ -350,6 +376,36 @@ class RollingRadius:
         s.scatter[s.head[c], c] = scatter
         s.head[c] = (s.head[c] + 1) % self.config.memory_blocks
         s.filled[c] = min(s.filled[c] + 1, self.config.memory_blocks)
+
+    def _trend(self):
+        r"""Each wheel's straight line through its memory's block means against their order (one per
+        used block, the newest at 0): the line's value at the newest block and its variance, the slope
+        per block (> 0: rising) and whether it is significant (:math:`|b| > z\,\sigma_b`, n ≥
+        ``trend_min_blocks``). Residual variance shrunk towards the prior as the mean's (n − 2 degrees
+        of freedom): :math:`\sigma_b^2 = s_r^2/S_{aa}`, the value's :math:`s_r^2(1/n + \bar a^2/S_{aa})`."""
+        cfg = self.config
+        s = self._s
+        m = cfg.memory_blocks
+        n = s.filled
+        age = ((s.head[None, :] - 1 - np.arange(m)[:, None]) % m).astype(float)
+        mask = age < n[None, :]
+        count = np.maximum(n, 1)
+        a_bar = np.where(mask, age, 0.0).sum(axis=0) / count
+        x_bar = np.where(mask, s.memory, 0.0).sum(axis=0) / count
+        da = np.where(mask, age - a_bar, 0.0)
+        s_aa = (da**2).sum(axis=0)
+        ok = (n >= 3) & (s_aa > 0)
+        s_aa_safe = np.where(ok, s_aa, 1.0)
+        s_ax = (da * np.where(mask, s.memory - x_bar, 0.0)).sum(axis=0)
+        b = np.where(ok, -s_ax / s_aa_safe, 0.0)
+        resid = np.where(mask, s.memory - x_bar + b * (age - a_bar), 0.0)
+        s0 = cfg.prior_block_permille * 1e-3
+        s_r2 = (cfg.prior_weight * s0**2 + (resid**2).sum(axis=0)) / (cfg.prior_weight + np.maximum(n - 2, 0))
+        sigma_b = np.sqrt(s_r2 / s_aa_safe)
+        level = x_bar + b * a_bar
+        level_var = s_r2 * (1.0 / count + a_bar**2 / s_aa_safe)
+        significant = ok & (n >= cfg.trend_min_blocks) & (np.abs(b) > cfg.trend_z * sigma_b)
+        return level, level_var, b, significant
 
     def _moments(self, skip_newest: bool = False):
         """Each wheel's mean over its memory, the blocks' shrunk variance s², the count n and the

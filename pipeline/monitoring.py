@@ -200,7 +200,8 @@ def radius_evidence(
         pressure_kpa=grid,
         log_radius=np.log([[effective_rolling_radius(fz, 1e3 * q, tp) for q in grid] for fz in wheel_loads]),
     )
-    lag = vibration_lag_kpa(rows.t_s - 0.5 * dt, rows.excess, rows.changes, gain, update_t_s, held=rows.held)
+    lag = vibration_lag_kpa(rows.t_s - 0.5 * dt, rows.excess, rows.changes, gain, update_t_s, held=rows.held,
+                            trend=rows.trend)  # fmt: skip
     return RadiusEvidence(excess=excess, sigma=sigma, gain_per_kpa=gain, model=model, lag_kpa=lag), analysis
 
 

@@ -175,3 +175,17 @@ def test_a_stale_vibration_estimate_with_its_lag_lets_the_radii_carry_a_drop():
     fused = fuse_with_radii(p_hat, sd, _rho(), excess[None], se, model, spread_permille=1.0, lag_kpa=lag)
     assert abs(fused.pressure_kpa[0, 3] - truth[3]) < 1.0 * fused.sigma_kpa[0, 3]
     assert abs(fused.pressure_kpa[0, 3] - truth[3]) < 10.0
+
+
+def test_a_ramp_lags_the_vibration_by_its_rate_times_the_time_constant():
+    from suvtwin.estimators.radius_fusion import vibration_lag_kpa
+    from suvtwin.estimators.rolling_radius import excess_of
+
+    gain = np.full(4, 0.085e-3)
+    t_b = np.arange(1, 6) * 4.0
+    trend = np.zeros((5, 4))
+    trend[3:] = excess_of(np.array([0.0, 0.0, 0.0, -0.1e-3]))  # the rear right's radius: −0.1 ‰/s
+    lag = vibration_lag_kpa(t_b, np.zeros((5, 4)), np.zeros((5, 4), bool), gain, t_b, tau_s=30.0, trend=trend)
+    np.testing.assert_allclose(lag[3:, 3], 30.0 * 0.1e-3 / gain[3], rtol=1e-12)  # 35 kPa
+    np.testing.assert_allclose(lag[:3], 0.0, atol=1e-12)
+    np.testing.assert_allclose(lag[:, :3], 0.0, atol=1e-9)

@@ -77,7 +77,7 @@ def test_chunking_does_not_change_the_result_and_the_state_is_bounded():
     ra = RollingRadius(POS, 0.01, R0, cfg)
     parts = [ra.update(t[i : i + 777], w[i : i + 777], yaw[i : i + 777], np.zeros(777)[: min(777, n - i)],
                        np.zeros(777)[: min(777, n - i)]) for i in range(0, n, 777)]  # fmt: skip
-    for name in ("t_s", "excess", "sigma", "blocks", "used", "changes", "held"):
+    for name in ("t_s", "excess", "sigma", "blocks", "used", "changes", "held", "trend"):
         np.testing.assert_array_equal(np.concatenate([getattr(p, name) for p in parts]), getattr(whole, name))
     # the memory's 5 blocks and at most one block's samples (400 × (4 + 3))
     assert whole.blocks.max() == 5 and ra.state_nbytes <= 400 * 7 * 8 + 1000
@@ -129,6 +129,30 @@ def test_a_drop_within_a_block_restarts_every_wheel_and_the_excesses_stay_consis
     after = rows.excess[k + 2 :]
     np.testing.assert_allclose(after, np.tile(truth, (len(after), 1)), atol=0.3e-3)
     np.testing.assert_allclose(after.sum(axis=1), 0.0, atol=1e-12)
+
+
+def test_a_ramp_is_followed_by_its_line_not_the_memory_mean():
+    """The rear right's radius falls 0.12 ‰/s from 40 s to 70 s (a slow leak); no block is far
+    enough from the others to be a change. The memory's mean would trail the ramp by half its six
+    blocks (1.4 ‰); the straight line through them reads it at the newest block. At steady radii
+    the slope is rarely taken (3σ)."""
+    n = 10000
+    t = np.arange(n) * 0.01
+    radii = np.tile(np.full(4, R0), (n, 1))
+    radii[:, 3] *= 1 - 0.12e-3 * np.clip(t - 40.0, 0.0, 30.0)
+    rng = np.random.default_rng(6)
+    w = _wheel_speeds(radii, np.full(n, 25.0), np.zeros(n)) * (1 + 1e-3 * rng.standard_normal((n, 4)))
+    z = np.zeros(n)
+    rows = RollingRadius(POS, 0.01, R0).update(t, w, z, z, z)
+    truth = excess_of(np.log(radii[np.round(rows.t_s / 0.01).astype(int)] / R0))
+    ramp = (rows.t_s >= 60.0) & (rows.t_s <= 70.0)
+    assert not rows.changes.any() and np.all(rows.trend[ramp, 3] < 0)
+    # the line at the newest block (its centre 2 s back: 0.24 ‰ of ramp) against a mean 6 s back
+    np.testing.assert_allclose(rows.excess[ramp, 3], truth[ramp, 3], atol=0.5e-3)
+    off = RollingRadius(POS, 0.01, R0, RadiusConfig(trend_z=None)).update(t, w, z, z, z)
+    assert np.all(off.excess[ramp, 3] - truth[ramp, 3] > 1.0e-3) and not off.trend.any()
+    steady = rows.t_s < 40.0
+    assert np.mean(rows.trend[steady] != 0.0) < 0.1
 
 
 def test_one_block_apart_is_an_outlier_not_a_change():
