@@ -135,12 +135,12 @@ class DeflationRule:
         (0.75, 0.15): the common loss's σ is then not smaller than the data's. Without the tracks
         given, every pair gets `track_correlation`.
     radius_spread_permille : float
-        With a placard reference, the spread (σ) of the tyres' effective rolling radii about the
-        tyre model's at the same pressure and load, ‰ (manufacturing, wear): the radius analysis
-        then compares the tyres against the model within it (1 ‰ = 0.37 mm on the SUV's tyre; an
-        assumption for a real car, where a reset calibrates it away; the simulator's tyres are
-        identical, 0). With a learned reference the radii are calibrated at the reset and this
-        is not used.
+        The spread (σ) of the tyres' effective rolling radii about the tyre model's at the same
+        pressure and load, ‰ (manufacturing, wear): the fusion with the radii compares the tyres
+        against the model within it (1 ‰ = 0.37 mm on the SUV's tyre; an assumption for a real
+        car, where a reset calibrates it away; the simulator's tyres are identical, 0), with a
+        placard reference and, with learned ones, until every tyre has its reference (then the
+        radii are compared against their values at that moment and this is not used).
     radius_learn_s : float
         With a learned reference, the time after the reset at which the radii are calibrated for the
         relative route (each tyre against the others since then; 20 s: five blocks of the radius

@@ -60,14 +60,16 @@ import numpy.typing as npt
 import scipy.interpolate
 
 from suvtwin.errors import InputError
+from suvtwin.estimators.rolling_radius import excess_of
 
 __all__ = ["FusedPressure", "RadiusModel", "excess_cov", "excess_operator", "fuse_with_radii", "gls_step",
            "vibration_lag_kpa", "wheel_sd"]  # fmt: skip
 
 
 def excess_operator(n_c: int) -> np.ndarray:
-    """A with (A d)_i = d_i − mean of the others' d (C, C)."""
-    return (1.0 + 1.0 / (n_c - 1)) * np.eye(n_c) - np.full((n_c, n_c), 1.0 / (n_c - 1))
+    """A with (A d)_i = d_i − mean of the others' d (C, C): :func:`.rolling_radius.excess_of` as a
+    matrix (symmetric, so its rows are the excesses of the unit vectors)."""
+    return excess_of(np.eye(n_c))
 
 
 def excess_cov(wheel_sd: np.ndarray) -> np.ndarray:
@@ -265,8 +267,7 @@ def vibration_lag_kpa(
         step = e[b] - e[b - 1]
         if not np.all(np.isfinite(step)):
             continue
-        d = (n_c - 1) / n_c * step
-        dp = np.abs(d - np.median(d)) / g
+        dp = _wheel_steps_kpa(step, g)
         later = t_r >= t_b[b]
         out[later] += dp[None, :] * np.exp(-(t_r[later, None] - t_b[b]) / tau_s)
     at = np.searchsorted(t_b, t_r, side="right") - 1
@@ -277,6 +278,13 @@ def vibration_lag_kpa(
     if trend is not None:
         rate = np.nan_to_num(np.asarray(trend, dtype=float))
         slope = np.where(at[:, None] >= 0, rate[np.maximum(at, 0)], 0.0)
-        d = (n_c - 1) / n_c * slope
-        out += tau_s * np.abs(d - np.median(d, axis=1, keepdims=True)) / g[None, :]
+        out += tau_s * _wheel_steps_kpa(slope, g)
     return out
+
+
+def _wheel_steps_kpa(excess_step: np.ndarray, gain: np.ndarray) -> np.ndarray:
+    """|Δp| per tyre (…, C), kPa, from a step of the excesses (…, C), most tyres taken as unchanged:
+    d̃ = (C − 1)/C Δe, d = d̃ − median(d̃), |d|/g (:func:`vibration_lag_kpa`)."""
+    n_c = gain.size
+    d = (n_c - 1) / n_c * excess_step
+    return np.abs(d - np.median(d, axis=-1, keepdims=True)) / gain
