@@ -252,7 +252,9 @@ def vibration_lag_kpa(
     step where the others stay; a change not yet confirmed: the vibration cannot have followed it).
     `trend` (B, C): the excess's slope where the analysis follows a ramp (1/s; 0: none): the wheels'
     rates from it as the steps above, and a first-order lag of time constant τ trails a ramp of rate
-    r by r τ, added while the ramp lasts. Uses the blocks up to each row only (causal)."""
+    r by r τ, added while the ramp lasts and decaying as :math:`e^{-(t - t_e)/\tau}` after its last block
+:math:`t_e` (a first-order lag's error once its input stops moving). Uses the blocks up to each row
+only (causal)."""
     t_b = np.asarray(t_blocks, dtype=float)
     e = np.asarray(excess, dtype=float)
     ch = np.asarray(changes, dtype=bool)
@@ -276,9 +278,19 @@ def vibration_lag_kpa(
         now = np.where(at[:, None] >= 0, np.nan_to_num(h[np.maximum(at, 0)]), 0.0)
         out += np.abs(now) / g[None, :]
     if trend is not None:
+        # a first-order lag trails a ramp of rate r by r τ; once the ramp ends, that lag decays as e^(−t/τ)
         rate = np.nan_to_num(np.asarray(trend, dtype=float))
-        slope = np.where(at[:, None] >= 0, rate[np.maximum(at, 0)], 0.0)
-        out += tau_s * _wheel_steps_kpa(slope, g)
+        ramp = np.zeros((t_b.size, n_c))  # the lag the ramp leaves at each block, and when it was set
+        since = np.full(t_b.size, -np.inf)
+        for b in range(t_b.size):
+            if np.any(rate[b] != 0.0):
+                ramp[b], since[b] = tau_s * _wheel_steps_kpa(rate[b], g), t_b[b]
+            elif b > 0:
+                ramp[b], since[b] = ramp[b - 1], since[b - 1]
+        now = np.maximum(at, 0)
+        decay = np.where(at >= 0, np.exp(-np.maximum(t_r - since[now], 0.0) / tau_s), 0.0)
+        active = (at >= 0) & np.any(rate[now] != 0.0, axis=1)
+        out += ramp[now] * np.where(active, 1.0, decay)[:, None]
     return out
 
 

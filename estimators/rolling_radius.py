@@ -56,10 +56,14 @@ to −1.3 ‰ instead of 0 for 20 s), else it is dropped as an outlier (a wheel 
 rough stretch read a class D run's front 11 ‰ small for one block). So a drop in pressure is
 followed within two blocks, with the estimate never averaging across the change. A slow leak
 moves the blocks a little each time, none far enough to be a change, and the memory's mean would
-trail the ramp by half its length: where the straight line through a wheel's blocks has a slope
-beyond ``trend_z`` σ, every wheel's estimate is its line's value at the newest block, with the
-line's σ there (a ramp of 0.12 ‰/s is followed within 0.5 ‰ instead of 1.4 ‰ behind, and the
-fused ``slow_leak`` runs' ±2σ coverage went from 88 % to 98.5 %). The state is the last
+trail the ramp by half its length: where a ramp through a wheel's blocks has a slope beyond
+``trend_z`` σ, every wheel's estimate is the ramp's value at the newest block, with its σ there (a
+ramp of 0.12 ‰/s is followed within 0.5 ‰ instead of 1.4 ‰ behind, and the fused ``slow_leak``
+runs' ±2σ coverage went from 88 % to 98.5 %). The ramp is the straight line or, where it fits the
+blocks better, a line that began from a flat stretch or ended in one (a two-phase regression, joined
+at a block): the straight line alone carried a leak on past its end by a block's worth (0.25 ‰) and
+took a block longer to take up its start. No ramp is taken while a block is held as a possible
+change (a step inside a block reads as the start of a ramp for one block). The state is the last
 ``memory_blocks`` block means per wheel, a held block, the last block and the current block's
 samples: fixed in size, so the cost per second of data does not grow.
 
@@ -115,9 +119,9 @@ class RadiusConfig:
     max_scatter_permille : float
         A block whose samples scatter more than this (any wheel), ‰, is skipped.
     trend_z : float or None
-        A wheel's straight line through its memory's blocks whose slope is this many σ from 0 (a
-        ramp: a slow leak) makes every wheel's estimate the line's value at the newest block
-        instead of the memory's mean (None: never).
+        A wheel's ramp through its memory's blocks (a straight line, or one that began or ended at a
+        block) whose slope is this many σ from 0 (a slow leak) makes every wheel's estimate the
+        ramp's value at the newest block instead of the memory's mean (None: never).
     trend_min_blocks : int
         Fewest blocks a significant slope needs.
     """
@@ -355,7 +359,7 @@ class RollingRadius:
         held = np.where(np.isfinite(s.pending) & (n > 0), s.pending - mean, 0.0)
         value, spread = mean, var / np.maximum(n, 1)
         slope = np.zeros(n_c)
-        if cfg.trend_z is not None:
+        if cfg.trend_z is not None and not np.isfinite(s.pending).any():  # a step pending: no ramp
             level, level_var, rate, significant = self._trend()
             if significant.any():  # one wheel's ramp moves every excess: all extrapolated, or none
                 fit = n >= 3
@@ -378,34 +382,67 @@ class RollingRadius:
         s.filled[c] = min(s.filled[c] + 1, self.config.memory_blocks)
 
     def _trend(self):
-        r"""Each wheel's straight line through its memory's block means against their order (one per
-        used block, the newest at 0): the line's value at the newest block and its variance, the slope
-        per block (> 0: rising) and whether it is significant (:math:`|b| > z\,\sigma_b`, n ≥
-        ``trend_min_blocks``). Residual variance shrunk towards the prior as the mean's (n − 2 degrees
-        of freedom): :math:`\sigma_b^2 = s_r^2/S_{aa}`, the value's :math:`s_r^2(1/n + \bar a^2/S_{aa})`."""
+        r"""Each wheel's ramp through its memory's block means against their order (one per used block,
+        the newest at age 0): its value at the newest block and the variance of that value, the current
+        slope per block (> 0: rising) and whether the memory holds a ramp.
+
+        The shapes: the straight line (:math:`g = a`, the age), a ramp that ended k blocks ago and is
+        flat since (:math:`g = \max(a - k, 0)`, at least three blocks on the ramp) and one that began
+        k blocks ago from a flat stretch (:math:`g = \min(a, k)`, at least ``trend_min_blocks`` blocks
+        on it), each fitted as :math:`x = \alpha + \beta g` by least squares (a two-phase regression
+        joined at a block, Hinkley 1971). A shape counts where its slope is significant,
+        :math:`|\beta| > z\,\sigma_\beta` with n ≥ ``trend_min_blocks``; of those, the one with the
+        least residual sum of squares over the wheels is taken, the same for every wheel (one tyre's
+        ramp moves every excess, and they start and end together). Residual variance shrunk towards the
+        prior as the mean's (n − 2 degrees of freedom): :math:`\sigma_\beta^2 = s_r^2/S_{gg}`, the
+        value's :math:`s_r^2(1/n + \bar g^2/S_{gg})`.
+
+        Reference: D. V. Hinkley, "Inference in two-phase regression", JASA 66(336), 736–743, 1971."""
         cfg = self.config
         s = self._s
         m = cfg.memory_blocks
         n = s.filled
         age = ((s.head[None, :] - 1 - np.arange(m)[:, None]) % m).astype(float)
         mask = age < n[None, :]
+        wheels = n >= cfg.trend_min_blocks
+        shapes = [(age, 1.0, n >= 3)]
+        shapes += [(np.maximum(age - k, 0.0), 0.0, (n - 1 - k >= 2)) for k in range(1, m - 2)]
+        first = cfg.trend_min_blocks - 1  # a ramp that began: at least trend_min_blocks blocks on it
+        shapes += [(np.minimum(age, k), 1.0, (n - 1 - k >= 1)) for k in range(first, m - 1)]
+        best = np.inf
+        level = level_var = rate = np.zeros(n.size)
+        significant = np.zeros(n.size, dtype=bool)
+        for g, now, enough in shapes:
+            alpha, alpha_var, beta, sigma_beta, ok, rss = self._fit(g, mask, n)
+            ok &= enough
+            sig = ok & wheels & (np.abs(beta) > cfg.trend_z * sigma_beta)
+            if not sig.any() or not ok[wheels].all() or rss[wheels].sum() >= best:
+                continue
+            best = rss[wheels].sum()
+            level, level_var, rate, significant = alpha, alpha_var, -beta * now, sig
+        return level, level_var, rate, significant
+
+    def _fit(self, g: np.ndarray, mask: np.ndarray, n: np.ndarray):
+        """Least squares x = α + β g of each wheel's memory on the regressor `g` (M, C) over `mask`:
+        α (the value where g = 0, the newest block), its variance, β, σ_β, whether it could be fitted
+        (n ≥ 3, g not constant) and the residual sum of squares (:meth:`_trend`)."""
+        cfg = self.config
+        s = self._s
         count = np.maximum(n, 1)
-        a_bar = np.where(mask, age, 0.0).sum(axis=0) / count
+        g_bar = np.where(mask, g, 0.0).sum(axis=0) / count
         x_bar = np.where(mask, s.memory, 0.0).sum(axis=0) / count
-        da = np.where(mask, age - a_bar, 0.0)
-        s_aa = (da**2).sum(axis=0)
-        ok = (n >= 3) & (s_aa > 0)
-        s_aa_safe = np.where(ok, s_aa, 1.0)
-        s_ax = (da * np.where(mask, s.memory - x_bar, 0.0)).sum(axis=0)
-        b = np.where(ok, -s_ax / s_aa_safe, 0.0)
-        resid = np.where(mask, s.memory - x_bar + b * (age - a_bar), 0.0)
+        dg = np.where(mask, g - g_bar, 0.0)
+        s_gg = (dg**2).sum(axis=0)
+        ok = (n >= 3) & (s_gg > 1e-12)
+        s_gg_safe = np.where(ok, s_gg, 1.0)
+        beta = np.where(ok, (dg * np.where(mask, s.memory - x_bar, 0.0)).sum(axis=0) / s_gg_safe, 0.0)
+        resid = np.where(mask, s.memory - x_bar - beta * (g - g_bar), 0.0)
+        rss = (resid**2).sum(axis=0)
         s0 = cfg.prior_block_permille * 1e-3
-        s_r2 = (cfg.prior_weight * s0**2 + (resid**2).sum(axis=0)) / (cfg.prior_weight + np.maximum(n - 2, 0))
-        sigma_b = np.sqrt(s_r2 / s_aa_safe)
-        level = x_bar + b * a_bar
-        level_var = s_r2 * (1.0 / count + a_bar**2 / s_aa_safe)
-        significant = ok & (n >= cfg.trend_min_blocks) & (np.abs(b) > cfg.trend_z * sigma_b)
-        return level, level_var, b, significant
+        s_r2 = (cfg.prior_weight * s0**2 + rss) / (cfg.prior_weight + np.maximum(n - 2, 0))
+        alpha = x_bar - beta * g_bar
+        alpha_var = s_r2 * (1.0 / count + g_bar**2 / s_gg_safe)
+        return alpha, alpha_var, beta, np.sqrt(s_r2 / s_gg_safe), ok, rss
 
     def _moments(self, skip_newest: bool = False):
         """Each wheel's mean over its memory, the blocks' shrunk variance s², the count n and the

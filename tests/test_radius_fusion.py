@@ -189,3 +189,28 @@ def test_a_ramp_lags_the_vibration_by_its_rate_times_the_time_constant():
     np.testing.assert_allclose(lag[3:, 3], 30.0 * 0.1e-3 / gain[3], rtol=1e-12)  # 35 kPa
     np.testing.assert_allclose(lag[:3], 0.0, atol=1e-12)
     np.testing.assert_allclose(lag[:, :3], 0.0, atol=1e-9)
+
+
+def test_the_lag_a_ramp_left_decays_as_a_first_order_lag_once_it_ends():
+    """A ramp of the rear right's pressure followed for 300 s (ten time constants: the lag in its
+    steady state r τ) ends at 300 s: the lag after it against scipy's simulation of the first-order
+    lag itself (signal.lsim of 1/(τ s + 1) driven by the ramp that stops)."""
+    from scipy import signal
+
+    from suvtwin.estimators.radius_fusion import vibration_lag_kpa
+    from suvtwin.estimators.rolling_radius import excess_of
+
+    tau, gain = 30.0, np.full(4, 0.085e-3)
+    t_b = np.arange(1, 101) * 4.0
+    trend = np.zeros((100, 4))
+    trend[t_b <= 300.0] = excess_of(np.array([0.0, 0.0, 0.0, -0.1e-3]))  # −0.1 ‰/s of radius
+    rate = 0.1e-3 / gain[3]  # kPa/s
+    t = np.linspace(0.0, 400.0, 40001)
+    path = rate * np.minimum(t, 300.0)
+    _, lagged, _ = signal.lsim(([1.0], [tau, 1.0]), path, t)
+    after = np.arange(304.0, 400.0, 2.0)
+    expect = np.interp(after, t, path - lagged)
+    none = np.zeros((100, 4))
+    lag = vibration_lag_kpa(t_b, none, none.astype(bool), gain, after, tau_s=tau, trend=trend)
+    np.testing.assert_allclose(lag[:, 3], expect, rtol=2e-3)
+    np.testing.assert_allclose(lag[:, :3], 0.0, atol=1e-9)

@@ -155,6 +155,26 @@ def test_a_ramp_is_followed_by_its_line_not_the_memory_mean():
     assert np.mean(rows.trend[steady] != 0.0) < 0.1
 
 
+def test_a_ramp_that_ended_is_not_carried_on():
+    """The same ramp, ending at 70 s: in the two blocks after it the straight line through the memory
+    would carry it on (0.25–0.28 ‰ past the truth, a block's worth of ramp); the ramp that ended
+    (flat since its last block) reads the radius within 0.15 ‰, and the slope reported is 0."""
+    n = 9000
+    t = np.arange(n) * 0.01
+    radii = np.tile(np.full(4, R0), (n, 1))
+    radii[:, 3] *= 1 - 0.12e-3 * np.clip(t - 40.0, 0.0, 30.0)
+    z = np.zeros(n)
+    for seed in range(5):
+        rng = np.random.default_rng(60 + seed)
+        w = _wheel_speeds(radii, np.full(n, 25.0), np.zeros(n)) * (1 + 1e-3 * rng.standard_normal((n, 4)))
+        rows = RollingRadius(POS, 0.01, R0).update(t, w, z, z, z)
+        truth = excess_of(np.log(radii[np.round(rows.t_s / 0.01).astype(int)] / R0))
+        after = (rows.t_s > 72.0) & (rows.t_s < 82.0)
+        assert after.sum() == 2
+        np.testing.assert_allclose(rows.excess[after], truth[after], atol=0.15e-3)
+        assert np.all(rows.trend[after] == 0.0)
+
+
 def test_one_block_apart_is_an_outlier_not_a_change():
     n = 8000
     radii = np.tile(np.full(4, R0), (n, 1))
