@@ -363,8 +363,11 @@ def warning_detection(
     """Deflation warnings on runs whose tyres `deflated[i]` are low from the start (or from
     `from_s[i]`, s: the driving is counted from there, a warning before it counting as at it): a
     run is detected when every deflated tyre warns within `window_s` of driving
-    (:func:`driving_time`). With `loss_start_s`, a deflated tyre's warning before its loss began is
-    counted with the warnings on inflated tyres (``warnings_before_loss``) and not as a detection.
+    (:func:`driving_time`); ``telltale``: the same shares where the first deflated tyre's warning
+    counts (FMVSS 138 has one low-pressure telltale, lit for any tyre: with all four low, one tyre's
+    warning lights it; the per-tyre measure is the stricter). With `loss_start_s`, a deflated tyre's
+    warning before its loss began is counted with the warnings on inflated tyres
+    (``warnings_before_loss``) and not as a detection.
     Reported overall and for one-tyre and all-four runs, with the driving time to the last needed
     warning (median, max over detected runs) and warnings on tyres that are not deflated; by road
     class when `classes` are given; and each missed run (``missed``: run index or `names[i]`, class,
@@ -376,7 +379,7 @@ def warning_detection(
     ``probability_below``, the others)."""
     if len(traces) != len(deflated):
         raise InputError(f"warning_detection: {len(traces)} traces but {len(deflated)} deflated lists")
-    hit, kind, delay, wrong, early, missed = [], [], [], 0, 0, []
+    hit, lamp, kind, delay, wrong, early, missed = [], [], [], [], 0, 0, []
     for r, (tr, low) in enumerate(zip(traces, deflated, strict=True)):
         times = warning_times(tr.t_est, tr.warning)
         idx = [CORNERS.index(c) for c in low]
@@ -385,12 +388,15 @@ def warning_detection(
             before = needed < loss_start_s[r]
             early += int(before.sum())
             needed = np.where(before, np.inf, needed)
+        origin = 0.0 if from_s is None else driving_time(tr.t_s, tr.speed_mps, from_s[r])
         if np.all(np.isfinite(needed)):
-            origin = 0.0 if from_s is None else driving_time(tr.t_s, tr.speed_mps, from_s[r])
             d = max(driving_time(tr.t_s, tr.speed_mps, float(needed.max())) - origin, 0.0)
             ok = d <= window_s
         else:
             d, ok = float("inf"), False
+        lit = needed[np.isfinite(needed)]  # the telltale: lit by the first deflated tyre's warning
+        lit_at = driving_time(tr.t_s, tr.speed_mps, float(lit.min())) - origin if lit.size else np.inf
+        lamp.append(bool(lit_at <= window_s))
         hit.append(ok)
         delay.append(d)
         kind.append("all_four" if len(idx) == 4 else "one_tyre")
@@ -404,6 +410,12 @@ def warning_detection(
     for name in ("one_tyre", "all_four"):
         m = kind_a == name
         out[name] = {"runs": int(m.sum()), "detected": float(hit_a[m].mean()) if m.any() else None}
+    lamp_a = np.array(lamp, dtype=bool)
+    out["telltale"] = {"detected": float(lamp_a.mean()) if lamp else None}
+    for name in ("one_tyre", "all_four"):
+        m = kind_a == name
+        share = float(lamp_a[m].mean()) if m.any() else None
+        out["telltale"][name] = {"runs": int(m.sum()), "detected": share}
     found = delay_a[hit_a]
     out["time_to_warn_s_median"] = float(np.median(found)) if found.size else None
     out["time_to_warn_s_max"] = float(found.max()) if found.size else None
@@ -607,7 +619,8 @@ def score_set(
             if window <= longest + 1.0:
                 d = warning_detection(traces, [i["deflated"] for i in infos], window_s=window)
                 out["warning_by_window"][f"{window:g}s"] = {
-                    k: d[k] for k in ("detected", "one_tyre", "all_four", "warnings_on_inflated_tyres")
+                    k: d[k]
+                    for k in ("detected", "one_tyre", "all_four", "telltale", "warnings_on_inflated_tyres")
                 }
     elif set_name == "reset_leak":
         # UN R141's procedure: references learned after the reset, then the loss; warned within 60 s
@@ -624,8 +637,8 @@ def score_set(
         for window in (0.0, 30.0, 60.0, 120.0):
             d = warning_detection(traces, deflated, window_s=window, from_s=ends, loss_start_s=starts)
             out["warning_by_window"][f"{window:g}s"] = {
-                k: d[k] for k in ("detected", "one_tyre", "all_four", "warnings_on_inflated_tyres",
-                                  "warnings_before_loss")
+                k: d[k] for k in ("detected", "one_tyre", "all_four", "telltale",
+                                  "warnings_on_inflated_tyres", "warnings_before_loss")
             }  # fmt: skip
         # every tyre's reference learned at some update: each then has a loss probability
         learned = [

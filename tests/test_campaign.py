@@ -160,6 +160,8 @@ def test_report_is_self_contained_with_goals_and_figures(finished):
     assert monitor["slow_leak"]["scores"]["runs"] == 1 and "settle_s_max" in monitor["slow_leak"]["targets"]
     assert "settle_s_max" in monitor["slow_leak"]["targets"]["with_radii"]  # the radii fused in
     assert monitor["warning"]["targets"]["detected_within_60s"]["value"] in (0.0, 1.0)
+    assert monitor["warning"]["scores"]["warning"]["telltale"]["detected"] in (0.0, 1.0)
+    assert "low-pressure telltale" in page
     example = monitor["slow_leak"]["example"]
     assert example["truth_kpa"][0] > example["truth_kpa"][-1]  # the leaking tyre's true pressure falls
 

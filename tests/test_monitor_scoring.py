@@ -156,6 +156,11 @@ def test_warning_detection_within_a_window_of_driving():
     assert out["time_to_warn_s_median"] == pytest.approx(30.0)
     assert out["warnings_on_inflated_tyres"] == 1  # run 3 warns fl, deflated is fr
     assert warning_detection(runs[:1], [["fl"]], window_s=20.0)["detected"] == 0.0
+    # one telltale (FMVSS 138): the all-four run lights it with three tyres; run 3's lamp is a wrong tyre's
+    assert out["telltale"]["all_four"] == {"runs": 1, "detected": 1.0}
+    assert out["telltale"]["one_tyre"] == {"runs": 2, "detected": 0.5}
+    early = warning_detection(runs[1:2], [["fl", "fr", "rl", "rr"]], window_s=5.0)
+    assert early["telltale"]["detected"] == 0.0
 
 
 def test_warning_detection_after_a_loss_counts_driving_from_its_end_and_early_warnings_as_false():

@@ -221,6 +221,10 @@ def _monitor_html(monitor: dict) -> list[str]:
             share = w.get("detected")
             parts.append(" Runs whose deflated tyres were all warned within 60 s of driving: "
                          + ("—" if share is None else f"{100 * share:.0f} %") + ".")  # fmt: skip
+            lamp = (w.get("telltale") or {}).get("detected")
+            if lamp is not None:
+                parts.append(f" Runs whose low-pressure telltale (one for the car, FMVSS 138) was lit by a"
+                             f" deflated tyre within 60 s: {100 * lamp:.0f} %.")  # fmt: skip
             causes = w.get("missed_causes")
             if causes and sum(causes.values()):
                 parts.append(
