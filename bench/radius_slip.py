@@ -1,0 +1,128 @@
+"""Why the radius analysis's blocks are off on rough roads: the wheels' longitudinal slip, not their radii.
+
+Run: ``python bench/radius_slip.py [--runs-dir bench/_runs/constant] [--runs 100]`` — prints JSON.
+One process; the cached ``constant`` runs of ``bench/monitor_mujoco.py`` are read (simulated first
+if missing).
+
+Per run, 4 s block and wheel (the blocks after the first 8 s): the block's mean log-radius excess
+as the radius analysis reads it from the wheel speeds
+(:meth:`suvtwin.estimators.rolling_radius.RollingRadius.sample_excess`) against
+
+- (a) MF-Tyre 6.1's effective rolling radius at the tyre's pressure and its mean load over the block
+  (the simulator's true ``{c}_tire_fz_n``): what the analysis assumes;
+- (b) the same, with the excess of the block's true mean longitudinal slip ratio
+  (``{c}_tire_slip_ratio``, κ = (ω R_e − v)/v) taken out: the part of (a) that is the
+  wheel slipping under its drive torque, not its radius;
+- (c) MF-Tyre's log radius averaged over the block's samples of the true load (the radius's
+  dynamic mean; ln R_e is concave in F_z).
+
+Printed: the RMS of each error (‰) by the block's largest per-sample scatter of the wheels' excess
+(‰, the analysis's roughness measure; its ``max_scatter_permille`` skips blocks beyond 10) and by
+road class, with the blocks' median share of samples with a wheel off the ground. A car measures
+neither κ nor F_z: (b) says how much of the error a model of the slip (drive torque over slip
+stiffness, which varies with the load) could remove, (c) whether the radius's own nonlinearity
+explains it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+import pyarrow.parquet as pq
+
+from suvtwin.estimators.rolling_radius import RollingRadius, excess_of
+from suvtwin.mjcf.tire import effective_rolling_radius, load_tire
+from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
+from suvtwin.pipeline.monitor_scenarios import scenario_set, simulate_cached
+from suvtwin.pipeline.monitoring import wheel_positions
+
+BLOCK_S, SKIP_S = 4.0, 8.0
+SCATTER_EDGES = (0.0, 2.0, 4.0, 7.0, 10.0, 20.0, np.inf)
+
+
+def block_errors(path: Path, tire) -> dict[str, np.ndarray]:
+    """Per block (after `SKIP_S`): the excess errors (a), (b), (c) of the module docstring (B, C), the
+    wheels' largest sample scatter (B,) and the share of samples with a wheel off the ground (B,)."""
+    names = ("wheel_speed_radps", "tire_fz_n", "pressure_kpa", "tire_slip_ratio")
+    columns = ["t_s", "yaw_rate_radps"] + [f"{c}_{k}" for c in CORNERS for k in names]
+    tab = pq.read_table(path, columns=columns)
+    col = {k: tab[k].to_numpy() for k in columns}
+    t = col["t_s"]
+    dt = float(np.median(np.diff(t)))
+    analysis = RollingRadius(wheel_positions(load_vehicle()), dt, tire.unloaded_radius)
+    w = np.stack([col[f"{c}_wheel_speed_radps"] for c in CORNERS], axis=1)
+    e, ok = analysis.sample_excess(w, col["yaw_rate_radps"])
+    fz = np.stack([col[f"{c}_tire_fz_n"] for c in CORNERS], axis=1)
+    p_pa = 1e3 * np.stack([col[f"{c}_pressure_kpa"] for c in CORNERS], axis=1)
+    kappa = np.stack([col[f"{c}_tire_slip_ratio"] for c in CORNERS], axis=1)
+    tp = tire.to_array()
+    n = int(round(BLOCK_S / dt))
+    out: dict[str, list] = {"a": [], "b": [], "c": [], "scatter": [], "airborne": []}
+    for start in range(int(round(SKIP_S / dt)), t.size - n + 1, n):
+        s = slice(start, start + n)
+        if ok[s].mean() < 0.5:
+            continue
+        meas = e[s][ok[s]].mean(axis=0)
+        scatter = e[s][ok[s]].std(axis=0).max()
+        mean_fz, mean_p = fz[s].mean(axis=0), p_pa[s].mean(axis=0)
+        static = np.log([effective_rolling_radius(f, q, tp) for f, q in zip(mean_fz, mean_p, strict=True)])
+        sub = slice(start, start + n, 10)  # the radius's dynamic mean from every 10th sample
+        dyn = np.mean([[np.log(effective_rolling_radius(f, q, tp)) for f, q in zip(fr, pr, strict=True)]
+                       for fr, pr in zip(fz[sub], p_pa[sub], strict=True)], axis=0)  # fmt: skip
+        err_a = meas - excess_of(static)
+        out["a"].append(err_a)
+        # ω R_e = v (1 + κ): −ln ω = ln R_e − ln v − ln(1 + κ), so the slip moves the excess by −excess(κ)
+        out["b"].append(err_a + excess_of(np.log1p(kappa[s].mean(axis=0))))
+        out["c"].append(meas - excess_of(dyn))
+        out["scatter"].append(scatter)
+        out["airborne"].append(float(np.mean(np.any(fz[s] <= 1.0, axis=1))))
+    return {k: np.array(v) for k, v in out.items()}
+
+
+def _rms(x: np.ndarray) -> float | None:
+    return float(1e3 * np.sqrt(np.mean(x**2))) if x.size else None
+
+
+def _summary(blocks: dict[str, np.ndarray], mask: np.ndarray) -> dict:
+    return {
+        "blocks": int(mask.sum()),
+        "rms_permille": {k: _rms(blocks[k][mask]) for k in ("a", "b", "c")},
+        "airborne_share_median": float(np.median(blocks["airborne"][mask])) if mask.any() else None,
+    }
+
+
+def main(argv: list[str] | None = None) -> dict:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    default_dir = Path(__file__).resolve().parent / "_runs" / "constant"
+    parser.add_argument("--runs-dir", type=Path, default=default_dir)
+    parser.add_argument("--runs", type=int, default=100)
+    args = parser.parse_args(argv)
+    runs = scenario_set("constant", args.runs)
+    paths, _ = simulate_cached(runs, args.runs_dir, jobs=1)
+    tire = load_tire(None)
+    per_run = [(r.info["road_class"], block_errors(p, tire)) for r, p in zip(runs, paths, strict=True) if p]
+    blocks = {k: np.concatenate([b[k] for _, b in per_run]) for k in ("a", "b", "c", "scatter", "airborne")}
+    road = np.concatenate([[cls] * len(b["scatter"]) for cls, b in per_run])
+    scatter = 1e3 * blocks["scatter"]
+    by_scatter = {}
+    for lo, hi in zip(SCATTER_EDGES[:-1], SCATTER_EDGES[1:], strict=True):
+        by_scatter[f"{lo:g}-{hi:g}"] = _summary(blocks, (scatter >= lo) & (scatter < hi))
+    out = {
+        "bench": "radius_slip",
+        "runs": len(per_run),
+        "block_s": BLOCK_S,
+        "errors": {"a": "against MF-Tyre R_e at the mean load", "b": "(a) with the true mean slip taken out",
+                   "c": "against MF-Tyre ln R_e averaged over the true load"},  # fmt: skip
+        "all": _summary(blocks, np.ones(scatter.size, bool)),
+        "by_scatter_permille": by_scatter,
+        "by_class": {c: _summary(blocks, road == c) for c in sorted(set(road))},
+    }
+    print(json.dumps(out, indent=1))
+    return out
+
+
+if __name__ == "__main__":
+    main()
