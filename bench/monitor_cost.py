@@ -12,7 +12,8 @@ spread over all minutes), the real-time factor
 over the whole drive (asks ≥ 500), the state's size at the start and the end (bytes), and the
 compile time of the first call (excluded from the rates). With both tracks' front→rear preview
 and the wheel speeds' radius analysis (:class:`suvtwin.estimators.rolling_radius.RollingRadius`,
-fed the same chunks), as :func:`suvtwin.pipeline.monitoring.monitor_run` by default;
+fed the same chunks and each sample's tyre loads from the accelerometers), as
+:func:`suvtwin.pipeline.monitoring.monitor_run` by default;
 ``--no-preview``, ``--no-radius``: without (``radius_share`` is the radius analysis's part of the
 wall time).
 """
@@ -56,9 +57,10 @@ def main() -> None:
     minutes = float(args[0]) if len(args) > 0 else 60.0
     path = args[1] if len(args) > 1 else _run_file()
     from suvtwin.estimators.monitor import TyreMonitor
-    from suvtwin.estimators.rolling_radius import RollingRadius
+    from suvtwin.estimators.rolling_radius import RollingRadius, load_share
     from suvtwin.mjcf.tire import load_tire
     from suvtwin.mjcf.vehicle import load_vehicle
+    from suvtwin.pipeline.estimation import corner_sprung_mass, corner_static_load
     from suvtwin.pipeline.monitoring import corner_models, wheel_positions
 
     frame = pq.read_table(path).to_pandas()
@@ -73,12 +75,17 @@ def main() -> None:
     tracks = ((0, 2), (1, 3)) if preview else ()  # both tracks' preview (the default), or none
     monitor = TyreMonitor(corner_models(CORNERS), dt=dt, names=CORNERS, tracks=tracks,
                           wheelbase_m=load_vehicle().wheelbase)
-    analysis = RollingRadius(wheel_positions(load_vehicle()), dt, load_tire().unloaded_radius)
+    vehicle = load_vehicle()
+    analysis = RollingRadius(wheel_positions(vehicle), dt, load_tire().unloaded_radius)
+    # each sample's tyre loads from the accelerometers, as the pipeline feeds them (the run has no load)
+    masses = ([corner_sprung_mass(c, vehicle=vehicle) for c in CORNERS], vehicle.unsprung_mass,
+              [corner_static_load(c, vehicle=vehicle) for c in CORNERS])  # fmt: skip
     chunk = int(round(10.0 / dt))
     start = time.perf_counter()
     monitor.update(np.arange(chunk) * dt, v[:chunk], acc_s[:chunk], acc_u[:chunk])  # compiles
     if radius:
-        analysis.update(np.arange(chunk) * dt, wheel[:chunk], yaw[:chunk], lat[:chunk], lon[:chunk])
+        analysis.update(np.arange(chunk) * dt, wheel[:chunk], yaw[:chunk], lat[:chunk], lon[:chunk],
+                        load_share=load_share(acc_s[:chunk], acc_u[:chunk], *masses))  # fmt: skip
     compile_s = time.perf_counter() - start
     state_start = monitor.state_nbytes + (analysis.state_nbytes if radius else 0)
     total = int(round(minutes * 60.0 / dt))
@@ -94,7 +101,9 @@ def main() -> None:
         monitor.update(t, v[i : i + m], acc_s[i : i + m], acc_u[i : i + m])
         if radius:
             mid = time.perf_counter()
-            analysis.update(t, wheel[i : i + m], yaw[i : i + m], lat[i : i + m], lon[i : i + m])
+            share = load_share(acc_s[i : i + m], acc_u[i : i + m], *masses)
+            part = (wheel[i : i + m], yaw[i : i + m], lat[i : i + m], lon[i : i + m])
+            analysis.update(t, *part, load_share=share)
             radius_wall += time.perf_counter() - mid
         wall = time.perf_counter() - tick
         done += m

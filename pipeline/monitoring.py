@@ -24,7 +24,7 @@ from suvtwin.errors import InputError
 from suvtwin.estimators.deflation import DeflationRule, RadiusEvidence, deflation_warnings
 from suvtwin.estimators.monitor import SKIP_REASONS, TAIL_LEVELS, MonitorConfig, MonitorUpdate, TyreMonitor
 from suvtwin.estimators.radius_fusion import RadiusModel, vibration_lag_kpa
-from suvtwin.estimators.rolling_radius import RadiusConfig, RollingRadius
+from suvtwin.estimators.rolling_radius import RadiusConfig, RollingRadius, load_share
 from suvtwin.files import atomic_write, read_parquet_table
 from suvtwin.mjcf.tire import effective_rolling_radius, load_tire
 from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
@@ -170,16 +170,29 @@ def radius_evidence(
     reference the placard, else the tyre's nominal pressure; for the learned references' route) and
     each tyre's log radius at its load on :data:`RADIUS_MODEL_GRID_KPA` (the model the estimates are
     fused against, :func:`~suvtwin.estimators.radius_fusion.fuse_with_radii`). `frame`: ``t_s``,
-    ``{c}_wheel_speed_radps`` and :data:`RADIUS_COLUMNS`;
+    ``{c}_wheel_speed_radps`` and :data:`RADIUS_COLUMNS`, and where it has every corner's
+    ``{c}_accel_sprung_mps2`` and ``{c}_accel_unsprung_mps2``, each sample's tyre loads from them
+    (:func:`~suvtwin.estimators.rolling_radius.load_share`, the corners' sprung masses with the loads,
+    paper 000 eq. 2): a sample where a wheel is (nearly) off the ground does not count;
     `loads`: the extra loads on the chassis (their positions share them among the wheels,
     :func:`~suvtwin.pipeline.estimation.corner_static_load`)."""
     t = frame["t_s"].to_numpy(dtype=float)
     tire = load_tire(tire_file)
     dt = stream_dt(t)
     analysis = RollingRadius(wheel_positions(vehicle), dt, tire.unloaded_radius, config)
+    wheel_loads = [corner_static_load(c, loads, vehicle=vehicle) for c in CORNERS]
+    accels = [[f"{c}_accel_{w}_mps2" for c in CORNERS] for w in ("sprung", "unsprung")]
+    share = None
+    if all(k in frame.columns for k in accels[0] + accels[1]):  # each sample's tyre loads
+        load_kg = float(sum(m for m, _ in loads))
+        share = load_share(
+            frame[accels[0]].to_numpy(dtype=float), frame[accels[1]].to_numpy(dtype=float),
+            [corner_sprung_mass(c, load_kg, vehicle=vehicle) for c in CORNERS], vehicle.unsprung_mass,
+            wheel_loads,
+        )  # fmt: skip
     rows = analysis.update(
         t, frame[[f"{c}_wheel_speed_radps" for c in CORNERS]].to_numpy(dtype=float),
-        *(frame[k].to_numpy(dtype=float) for k in RADIUS_COLUMNS),
+        *(frame[k].to_numpy(dtype=float) for k in RADIUS_COLUMNS), load_share=share,
     )  # fmt: skip
     at = np.searchsorted(rows.t_s, np.asarray(update_t_s) + 0.5 * dt, side="right") - 1
     excess = np.where(at[:, None] >= 0, rows.excess[np.maximum(at, 0)], np.nan)
@@ -190,7 +203,6 @@ def radius_evidence(
     held = held + (held.sum(axis=1, keepdims=True) - held) / (n_c - 1)
     sigma = np.hypot(np.where(at[:, None] >= 0, rows.sigma[np.maximum(at, 0)], np.nan), held)
     tp = tire.to_array()
-    wheel_loads = [corner_static_load(c, loads, vehicle=vehicle) for c in CORNERS]
     ref_pa = (placard_kpa * 1e3) if placard_kpa is not None else tire.nominal_pressure
     low_pa = (1.0 - rule.detect_fraction) * ref_pa
     log_re = np.log([[effective_rolling_radius(fz, q, tp) for q in (ref_pa, low_pa)] for fz in wheel_loads])
