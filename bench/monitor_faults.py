@@ -12,16 +12,21 @@ Each MuJoCo run is monitored clean and with one fault at a time, on all four cor
 - ``bias``: +2 m/s² offset on every accelerometer (a mounting or calibration error).
 
 Printed per case: the error at 30 s (mean, std, over runs × tyres, kPa), the ±2σ coverage after
-2 s, the windows used and skipped by reason, and the difference of the error from the clean case.
+2 s, the windows used and skipped by reason, and the difference of the error from the clean case;
+and the same for the pressure with the wheels' radii (``fused``: the run file with the faulty
+accelerometers through :func:`suvtwin.pipeline.monitoring.monitor_run`, whose radius analysis takes
+each sample's tyre loads from them).
 """
 
 from __future__ import annotations
 
 import json
 import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
+import pyarrow as pa
 import pyarrow.parquet as pq
 
 CORNERS = ("fl", "fr", "rl", "rr")
@@ -48,7 +53,7 @@ def _faults(acc_s: np.ndarray, acc_u: np.ndarray, t: np.ndarray) -> dict:
 def main() -> None:
     from suvtwin.estimators.monitor import SKIP_REASONS
     from suvtwin.pipeline.estimation import run_loads
-    from suvtwin.pipeline.monitoring import monitor_signals
+    from suvtwin.pipeline.monitoring import monitor_run, monitor_signals
 
     n_runs = int(sys.argv[1]) if len(sys.argv) > 1 else 12
     folder = Path(sys.argv[2]) if len(sys.argv) > 2 else Path("bench/_runs/constant")
@@ -58,8 +63,12 @@ def main() -> None:
     errors: dict = {}
     inside: dict = {}
     counts: dict = {}
+    fused_errors: dict = {}
+    fused_inside: dict = {}
+    scratch = Path(tempfile.mkdtemp())
     for path in paths:
-        table = pq.read_table(path).to_pandas()
+        arrow = pq.read_table(path)
+        table = arrow.to_pandas()
         loads = run_loads(json.loads(pq.read_schema(path).metadata[b"suvtwin.run"]))
         t = table["t_s"].to_numpy()
         truth = table[[f"{c}_pressure_kpa" for c in CORNERS]].to_numpy()
@@ -79,7 +88,26 @@ def main() -> None:
             total = counts.setdefault(case, {})
             for reason in SKIP_REASONS:
                 total[reason] = total.get(reason, 0) + int(np.sum(c[reason]))
+            # the same faults in the run file: the monitor with the radii (their load gate reads them)
+            faulty = arrow
+            for i, corner in enumerate(CORNERS):
+                for kind, values in (("sprung", s), ("unsprung", u)):
+                    name = f"{corner}_accel_{kind}_mps2"
+                    faulty = faulty.set_column(faulty.column_names.index(name), name, pa.array(values[:, i]))
+            tmp = scratch / f"{case}.parquet"
+            pq.write_table(faulty, tmp)
+            res = monitor_run(tmp).table
+            idx = np.searchsorted(t, res["t_s"].to_numpy())
+            fused = res[[f"{c}_fused_pressure_kpa" for c in CORNERS]].to_numpy()
+            fsig = res[[f"{c}_fused_sigma_kpa" for c in CORNERS]].to_numpy()
+            err = fused - truth[idx]
+            k = int(np.searchsorted(res["t_s"].to_numpy(), 30.0 - 1e-6))
+            if k < len(res):
+                fused_errors.setdefault(case, []).extend(err[k].tolist())
+            after = res["t_s"].to_numpy() > 2.0
+            fused_inside.setdefault(case, []).extend((np.abs(err[after]) <= 2 * fsig[after]).ravel().tolist())
     clean = np.array(errors["clean"])
+    fused_clean = np.array(fused_errors["clean"])
     result = {}
     for case in errors:
         e = np.array(errors[case])
@@ -89,6 +117,13 @@ def main() -> None:
             "change_from_clean_rms_kpa": round(float(np.sqrt(np.mean((e - clean) ** 2))), 2),
             "inside_2sigma_after_2s": round(float(np.mean(inside[case])), 3),
             "windows": counts[case],
+        }
+        f = np.array(fused_errors[case])
+        result[case]["fused"] = {
+            "error_30s_mean_kpa": round(float(f.mean()), 2),
+            "error_30s_std_kpa": round(float(f.std()), 2),
+            "change_from_clean_rms_kpa": round(float(np.sqrt(np.mean((f - fused_clean) ** 2))), 2),
+            "inside_2sigma_after_2s": round(float(np.mean(fused_inside[case])), 3),
         }
     print(json.dumps({"runs": len(paths), "tyres": len(CORNERS), "cases": result}, indent=2))
 
