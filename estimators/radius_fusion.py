@@ -252,9 +252,9 @@ def vibration_lag_kpa(
     step where the others stay; a change not yet confirmed: the vibration cannot have followed it).
     `trend` (B, C): the excess's slope where the analysis follows a ramp (1/s; 0: none): the wheels'
     rates from it as the steps above, and a first-order lag of time constant τ trails a ramp of rate
-    r by r τ, added while the ramp lasts and decaying as :math:`e^{-(t - t_e)/\tau}` after its last block
-:math:`t_e` (a first-order lag's error once its input stops moving). Uses the blocks up to each row
-only (causal)."""
+    r by r τ, added while the ramp lasts and decaying as :math:`e^{-(t - t_e)/\tau}` after its last
+    block :math:`t_e` (a first-order lag's error once its input stops moving). Uses the blocks up to
+    each row only (causal)."""
     t_b = np.asarray(t_blocks, dtype=float)
     e = np.asarray(excess, dtype=float)
     ch = np.asarray(changes, dtype=bool)
