@@ -57,11 +57,10 @@ def main() -> None:
     minutes = float(args[0]) if len(args) > 0 else 60.0
     path = args[1] if len(args) > 1 else _run_file()
     from suvtwin.estimators.monitor import TyreMonitor
-    from suvtwin.estimators.rolling_radius import RollingRadius, load_share
+    from suvtwin.estimators.rolling_radius import RollingRadius
     from suvtwin.mjcf.tire import load_tire
     from suvtwin.mjcf.vehicle import load_vehicle
-    from suvtwin.pipeline.estimation import corner_sprung_mass, corner_static_load
-    from suvtwin.pipeline.monitoring import corner_models, wheel_positions
+    from suvtwin.pipeline.monitoring import corner_models, tyre_load_share, wheel_positions
 
     frame = pq.read_table(path).to_pandas()
     t0 = frame["t_s"].to_numpy()
@@ -78,14 +77,13 @@ def main() -> None:
     vehicle = load_vehicle()
     analysis = RollingRadius(wheel_positions(vehicle), dt, load_tire().unloaded_radius)
     # each sample's tyre loads from the accelerometers, as the pipeline feeds them (the run has no load)
-    masses = ([corner_sprung_mass(c, vehicle=vehicle) for c in CORNERS], vehicle.unsprung_mass,
-              [corner_static_load(c, vehicle=vehicle) for c in CORNERS])  # fmt: skip
+    share_of = lambda s, u: tyre_load_share(s, u, vehicle=vehicle)  # noqa: E731
     chunk = int(round(10.0 / dt))
     start = time.perf_counter()
     monitor.update(np.arange(chunk) * dt, v[:chunk], acc_s[:chunk], acc_u[:chunk])  # compiles
     if radius:
         analysis.update(np.arange(chunk) * dt, wheel[:chunk], yaw[:chunk], lat[:chunk], lon[:chunk],
-                        load_share=load_share(acc_s[:chunk], acc_u[:chunk], *masses))  # fmt: skip
+                        load_share=share_of(acc_s[:chunk], acc_u[:chunk]))  # fmt: skip
     compile_s = time.perf_counter() - start
     state_start = monitor.state_nbytes + (analysis.state_nbytes if radius else 0)
     total = int(round(minutes * 60.0 / dt))
@@ -101,7 +99,7 @@ def main() -> None:
         monitor.update(t, v[i : i + m], acc_s[i : i + m], acc_u[i : i + m])
         if radius:
             mid = time.perf_counter()
-            share = load_share(acc_s[i : i + m], acc_u[i : i + m], *masses)
+            share = share_of(acc_s[i : i + m], acc_u[i : i + m])
             part = (wheel[i : i + m], yaw[i : i + m], lat[i : i + m], lon[i : i + m])
             analysis.update(t, *part, load_share=share)
             radius_wall += time.perf_counter() - mid

@@ -16,7 +16,7 @@ as the radius analysis reads it from the wheel speeds
 - (c) MF-Tyre's log radius averaged over the block's samples of the true load (the radius's
   dynamic mean; ln R_e is concave in F_z);
 - (d) as (a), with the samples left out where a wheel carries under ``min_load_share`` of its static
-  load by its two accelerometers (:func:`suvtwin.estimators.rolling_radius.load_share`), as the
+  load by its two accelerometers (:func:`suvtwin.pipeline.monitoring.tyre_load_share`), as the
   radius analysis does: the wheels off the ground.
 
 Printed: the RMS of each error (‰) by the block's largest per-sample scatter of the wheels' excess
@@ -37,12 +37,12 @@ from pathlib import Path
 import numpy as np
 import pyarrow.parquet as pq
 
-from suvtwin.estimators.rolling_radius import RadiusConfig, RollingRadius, excess_of, load_share
+from suvtwin.estimators.rolling_radius import RadiusConfig, RollingRadius, excess_of
 from suvtwin.mjcf.tire import effective_rolling_radius, load_tire
 from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
-from suvtwin.pipeline.estimation import corner_sprung_mass, corner_static_load, run_loads
+from suvtwin.pipeline.estimation import run_loads
 from suvtwin.pipeline.monitor_scenarios import scenario_set, simulate_cached
-from suvtwin.pipeline.monitoring import wheel_positions
+from suvtwin.pipeline.monitoring import tyre_load_share, wheel_positions
 
 BLOCK_S, SKIP_S = 4.0, 8.0
 SCATTER_EDGES = (0.0, 2.0, 4.0, 7.0, 10.0, 20.0, np.inf)
@@ -59,12 +59,9 @@ def block_errors(path: Path, tire) -> dict[str, np.ndarray]:
     col = {k: tab[k].to_numpy() for k in columns}
     vehicle = load_vehicle()
     loads = run_loads(json.loads(tab.schema.metadata[b"suvtwin.run"]))
-    load_kg = float(sum(m for m, _ in loads))
-    share = load_share(
+    share = tyre_load_share(
         np.stack([col[f"{c}_accel_sprung_mps2"] for c in CORNERS], axis=1),
-        np.stack([col[f"{c}_accel_unsprung_mps2"] for c in CORNERS], axis=1),
-        [corner_sprung_mass(c, load_kg, vehicle=vehicle) for c in CORNERS], vehicle.unsprung_mass,
-        [corner_static_load(c, loads, vehicle=vehicle) for c in CORNERS],
+        np.stack([col[f"{c}_accel_unsprung_mps2"] for c in CORNERS], axis=1), loads=loads, vehicle=vehicle,
     )  # fmt: skip
     with np.errstate(invalid="ignore"):
         carried = np.all(share >= RadiusConfig().min_load_share, axis=1)

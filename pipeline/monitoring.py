@@ -44,7 +44,7 @@ from suvtwin.tire_stiffness import tire_stiffness_of
 
 __all__ = [
     "CORNER_MODELS", "MonitorResult", "RADIUS_COLUMNS", "corner_models", "monitor_run", "monitor_signals",
-    "radius_evidence", "wheel_positions", "write_monitor",
+    "radius_evidence", "tyre_load_share", "wheel_positions", "write_monitor",
 ]  # fmt: skip
 
 RADIUS_COLUMNS = ("yaw_rate_radps", "lat_accel_mps2", "long_accel_mps2")
@@ -152,6 +152,19 @@ def wheel_positions(vehicle) -> np.ndarray:
     return np.array([[vehicle.wheelbase, front], [vehicle.wheelbase, -front], [0.0, rear], [0.0, -rear]])
 
 
+def tyre_load_share(acc_sprung: np.ndarray, acc_unsprung: np.ndarray, *, loads=(), vehicle) -> np.ndarray:
+    """Each sample's tyre load over its static load at the four corners (n, 4), from their sprung and
+    unsprung accelerations (n, 4) m/s² (:func:`~suvtwin.estimators.rolling_radius.load_share`): the
+    corners' sprung masses with the extra `loads` (paper 000 eq. 2), the vehicle's unsprung masses,
+    the static loads with the loads where they sit
+    (:func:`~suvtwin.pipeline.estimation.corner_static_load`)."""
+    load_kg = float(sum(m for m, _ in loads))
+    return load_share(
+        acc_sprung, acc_unsprung, [corner_sprung_mass(c, load_kg, vehicle=vehicle) for c in CORNERS],
+        vehicle.unsprung_mass, [corner_static_load(c, loads, vehicle=vehicle) for c in CORNERS],
+    )  # fmt: skip
+
+
 def radius_evidence(
     frame: pd.DataFrame,
     update_t_s: np.ndarray,
@@ -172,24 +185,18 @@ def radius_evidence(
     fused against, :func:`~suvtwin.estimators.radius_fusion.fuse_with_radii`). `frame`: ``t_s``,
     ``{c}_wheel_speed_radps`` and :data:`RADIUS_COLUMNS`, and where it has every corner's
     ``{c}_accel_sprung_mps2`` and ``{c}_accel_unsprung_mps2``, each sample's tyre loads from them
-    (:func:`~suvtwin.estimators.rolling_radius.load_share`, the corners' sprung masses with the loads,
-    paper 000 eq. 2): a sample where a wheel is (nearly) off the ground does not count;
+    (:func:`tyre_load_share`): a sample where a wheel is (nearly) off the ground does not count;
     `loads`: the extra loads on the chassis (their positions share them among the wheels,
     :func:`~suvtwin.pipeline.estimation.corner_static_load`)."""
     t = frame["t_s"].to_numpy(dtype=float)
     tire = load_tire(tire_file)
     dt = stream_dt(t)
     analysis = RollingRadius(wheel_positions(vehicle), dt, tire.unloaded_radius, config)
-    wheel_loads = [corner_static_load(c, loads, vehicle=vehicle) for c in CORNERS]
     accels = [[f"{c}_accel_{w}_mps2" for c in CORNERS] for w in ("sprung", "unsprung")]
     share = None
     if all(k in frame.columns for k in accels[0] + accels[1]):  # each sample's tyre loads
-        load_kg = float(sum(m for m, _ in loads))
-        share = load_share(
-            frame[accels[0]].to_numpy(dtype=float), frame[accels[1]].to_numpy(dtype=float),
-            [corner_sprung_mass(c, load_kg, vehicle=vehicle) for c in CORNERS], vehicle.unsprung_mass,
-            wheel_loads,
-        )  # fmt: skip
+        acc_s, acc_u = (frame[names].to_numpy(dtype=float) for names in accels)
+        share = tyre_load_share(acc_s, acc_u, loads=loads, vehicle=vehicle)
     rows = analysis.update(
         t, frame[[f"{c}_wheel_speed_radps" for c in CORNERS]].to_numpy(dtype=float),
         *(frame[k].to_numpy(dtype=float) for k in RADIUS_COLUMNS), load_share=share,
@@ -203,6 +210,7 @@ def radius_evidence(
     held = held + (held.sum(axis=1, keepdims=True) - held) / (n_c - 1)
     sigma = np.hypot(np.where(at[:, None] >= 0, rows.sigma[np.maximum(at, 0)], np.nan), held)
     tp = tire.to_array()
+    wheel_loads = [corner_static_load(c, loads, vehicle=vehicle) for c in CORNERS]
     ref_pa = (placard_kpa * 1e3) if placard_kpa is not None else tire.nominal_pressure
     low_pa = (1.0 - rule.detect_fraction) * ref_pa
     log_re = np.log([[effective_rolling_radius(fz, q, tp) for q in (ref_pa, low_pa)] for fz in wheel_loads])
