@@ -444,11 +444,9 @@ class RollingRadius:
 
         Reference: D. V. Hinkley, "Inference in two-phase regression", JASA 66(336), 736–743, 1971."""
         cfg = self.config
-        s = self._s
         m = cfg.memory_blocks
-        n = s.filled
-        age = ((s.head[None, :] - 1 - np.arange(m)[:, None]) % m).astype(float)
-        mask = age < n[None, :]
+        n = self._s.filled
+        age, mask = self._ages()
         wheels = n >= cfg.trend_min_blocks
         shapes = [(age, 1.0, n >= 3)]
         shapes += [(np.maximum(age - k, 0.0), 0.0, (n - 1 - k >= 2)) for k in range(1, m - 2)]
@@ -489,17 +487,22 @@ class RollingRadius:
         alpha_var = s_r2 * (1.0 / count + g_bar**2 / s_gg_safe)
         return alpha, alpha_var, beta, np.sqrt(s_r2 / s_gg_safe), ok, rss
 
+    def _ages(self) -> tuple[np.ndarray, np.ndarray]:
+        """Each memory slot's age in blocks (M, C; the newest 0) and whether it holds one of the
+        wheel's blocks: slot j of the ring is (head − 1 − j) mod M blocks old."""
+        s = self._s
+        m = self.config.memory_blocks
+        age = ((s.head[None, :] - 1 - np.arange(m)[:, None]) % m).astype(float)
+        return age, age < s.filled[None, :]
+
     def _moments(self, skip_newest: bool = False):
         """Each wheel's mean over its memory, the blocks' shrunk variance s², the count n and the
         blocks' mean sample scatter (`skip_newest`: without the newest block where it holds two or
         more)."""
         cfg = self.config
         s = self._s
-        m = cfg.memory_blocks
         n = s.filled.copy()
-        # the last n blocks of each wheel's ring: slot j is (head − 1 − j) mod M blocks old
-        age = (s.head[None, :] - 1 - np.arange(m)[:, None]) % m
-        mask = age < n[None, :]
+        age, mask = self._ages()
         if skip_newest:
             skip = n >= 2
             mask &= ~((age == 0) & skip[None, :])
