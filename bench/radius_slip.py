@@ -1,6 +1,7 @@
 """Why the radius analysis's blocks are off on rough roads: the wheels' longitudinal slip, not their radii.
 
-Run: ``python bench/radius_slip.py [--runs-dir bench/_runs/constant] [--runs 100]`` — prints JSON.
+Run: ``python bench/radius_slip.py [--set constant] [--runs-dir bench/_runs/<set>] [--runs 100]``;
+prints JSON.
 One process; the cached ``constant`` runs of ``bench/monitor_mujoco.py`` are read (simulated first
 if missing).
 
@@ -25,7 +26,10 @@ road class, with the blocks' median share of samples with a wheel off the ground
 neither κ nor F_z: (b) says how much of the error a model of the slip (drive torque over slip
 stiffness, which varies with the load) could remove, (c) whether the radius's own nonlinearity
 explains it, (d) what is left with the measured gate. Blocks with under half their samples
-counted are left out (of (d) only: ``blocks_gated``).
+counted are left out, and of (d) those where under ``RadiusConfig.min_valid_share`` pass the gate
+(``blocks_gated``), as the analysis skips them; ``gated_by_counted_share`` gives (d) by the share
+of the block's samples the gate keeps. ``--set``: another cached set's runs (``warning``, ``drop``,
+``slow_leak``; the truth is each block's mean pressure, so the changing sets are scored too).
 """
 
 from __future__ import annotations
@@ -46,12 +50,13 @@ from suvtwin.pipeline.monitoring import tyre_load_share, wheel_positions
 
 BLOCK_S, SKIP_S = 4.0, 8.0
 SCATTER_EDGES = (0.0, 2.0, 4.0, 7.0, 10.0, 20.0, np.inf)
+COUNTED_EDGES = (0.05, 0.15, 0.25, 0.35, 0.5, 0.75, 1.01)
 
 
 def block_errors(path: Path, tire) -> dict[str, np.ndarray]:
     """Per block (after `SKIP_S`): the excess errors (a), (b), (c), (d) of the module docstring (B, C;
-    (d) NaN where under half the block's samples count), the wheels' largest sample scatter (B,) and the
-    share of samples with a wheel off the ground (B,)."""
+    (d) NaN where no sample passes the gate), the share of samples that pass it (B,), the wheels'
+    largest sample scatter (B,) and the share of samples with a wheel off the ground (B,)."""
     names = ("wheel_speed_radps", "tire_fz_n", "pressure_kpa", "tire_slip_ratio", "accel_sprung_mps2",
              "accel_unsprung_mps2")  # fmt: skip
     columns = ["t_s", "yaw_rate_radps"] + [f"{c}_{k}" for c in CORNERS for k in names]
@@ -75,7 +80,7 @@ def block_errors(path: Path, tire) -> dict[str, np.ndarray]:
     kappa = np.stack([col[f"{c}_tire_slip_ratio"] for c in CORNERS], axis=1)
     tp = tire.to_array()
     n = int(round(BLOCK_S / dt))
-    out: dict[str, list] = {"a": [], "b": [], "c": [], "d": [], "scatter": [], "airborne": []}
+    out: dict[str, list] = {"a": [], "b": [], "c": [], "d": [], "scatter": [], "airborne": [], "counted": []}
     for start in range(int(round(SKIP_S / dt)), t.size - n + 1, n):
         s = slice(start, start + n)
         if ok[s].mean() < 0.5:
@@ -94,7 +99,8 @@ def block_errors(path: Path, tire) -> dict[str, np.ndarray]:
         out["c"].append(meas - excess_of(dyn))
         gate = ok[s] & carried[s]
         nan = np.full(len(CORNERS), np.nan)
-        out["d"].append(e[s][gate].mean(axis=0) - excess_of(static) if gate.mean() >= 0.5 else nan)
+        out["d"].append(e[s][gate].mean(axis=0) - excess_of(static) if gate.any() else nan)
+        out["counted"].append(float(gate.mean()))
         out["scatter"].append(scatter)
         out["airborne"].append(float(np.mean(np.any(fz[s] <= 1.0, axis=1))))
     return {k: np.array(v) for k, v in out.items()}
@@ -106,25 +112,27 @@ def _rms(x: np.ndarray) -> float | None:
 
 
 def _summary(blocks: dict[str, np.ndarray], mask: np.ndarray) -> dict:
+    gated = mask & (blocks["counted"] >= RadiusConfig().min_valid_share)
     return {
         "blocks": int(mask.sum()),
-        "rms_permille": {k: _rms(blocks[k][mask]) for k in ("a", "b", "c", "d")},
-        "blocks_gated": int(np.all(np.isfinite(blocks["d"][mask]), axis=1).sum()),
+        "rms_permille": {k: _rms(blocks[k][gated if k == "d" else mask]) for k in ("a", "b", "c", "d")},
+        "blocks_gated": int(gated.sum()),
         "airborne_share_median": float(np.median(blocks["airborne"][mask])) if mask.any() else None,
     }
 
 
 def main(argv: list[str] | None = None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    default_dir = Path(__file__).resolve().parent / "_runs" / "constant"
-    parser.add_argument("--runs-dir", type=Path, default=default_dir)
+    parser.add_argument("--set", default="constant", choices=["constant", "slow_leak", "drop", "warning"])
+    parser.add_argument("--runs-dir", type=Path, default=None)
     parser.add_argument("--runs", type=int, default=100)
     args = parser.parse_args(argv)
-    runs = scenario_set("constant", args.runs)
-    paths, _ = simulate_cached(runs, args.runs_dir, jobs=1)
+    runs = scenario_set(args.set, args.runs)
+    runs_dir = args.runs_dir or Path(__file__).resolve().parent / "_runs" / args.set
+    paths, _ = simulate_cached(runs, runs_dir, jobs=1)
     tire = load_tire(None)
     per_run = [(r.info["road_class"], block_errors(p, tire)) for r, p in zip(runs, paths, strict=True) if p]
-    keys = ("a", "b", "c", "d", "scatter", "airborne")
+    keys = ("a", "b", "c", "d", "scatter", "airborne", "counted")
     blocks = {k: np.concatenate([b[k] for _, b in per_run]) for k in keys}
     road = np.concatenate([[cls] * len(b["scatter"]) for cls, b in per_run])
     scatter = 1e3 * blocks["scatter"]
@@ -133,6 +141,7 @@ def main(argv: list[str] | None = None) -> dict:
         by_scatter[f"{lo:g}-{hi:g}"] = _summary(blocks, (scatter >= lo) & (scatter < hi))
     out = {
         "bench": "radius_slip",
+        "set": args.set,
         "runs": len(per_run),
         "block_s": BLOCK_S,
         "errors": {"a": "against MF-Tyre R_e at the mean load", "b": "(a) with the true mean slip taken out",
@@ -141,6 +150,17 @@ def main(argv: list[str] | None = None) -> dict:
         "all": _summary(blocks, np.ones(scatter.size, bool)),
         "by_scatter_permille": by_scatter,
         "by_class": {c: _summary(blocks, road == c) for c in sorted(set(road))},
+        "gated_by_counted_share": {
+            f"{lo:g}-{hi:g}": {
+                "blocks": int(sel.sum()),
+                "rms_permille": _rms(blocks["d"][sel]),
+                "by_class": {c: {"blocks": int((sel & (road == c)).sum()),
+                                 "rms_permille": _rms(blocks["d"][sel & (road == c)])}
+                             for c in sorted(set(road))},  # fmt: skip
+            }
+            for lo, hi in zip(COUNTED_EDGES[:-1], COUNTED_EDGES[1:], strict=True)
+            for sel in [(blocks["counted"] >= lo) & (blocks["counted"] < hi)]
+        },
     }
     print(json.dumps(out, indent=1))
     return out

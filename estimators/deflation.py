@@ -77,7 +77,7 @@ tyre that has since lost ``detect_fraction`` more than the others' mean warns on
 (:func:`_relative_loss`, ``relative_probability``, ``warning_relative``): before the vibration has
 learned any reference, as production wheel-speed systems do after their reset. A row counts for
 the confirmation where the tyre is observable, fused or compared. On the MuJoCo ``warning`` runs
-(placard, spread 1 ‰, 2026-12-03): warned within 60 s 93 % (one tyre 76 of 80, all four 17 of 20;
+(placard, spread 1 ‰, 2026-12-03): warned within 60 s 94 % (one tyre 77 of 80, all four 17 of 20;
 88 % without the radii), no warning on an inflated tyre; ``nominal_long`` (506 min): no false
 warning, the highest probability held 0.55;
 ``reset_leak`` (learned references, a 20 % leak after 150–180 s): one tyre warned within 60 s of
