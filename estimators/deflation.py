@@ -60,7 +60,22 @@ tyre unchanged (71 of 80), no warning on an inflated tyre; on ``nominal_long`` (
 minutes at placard) no warning, the common loss's highest probability held on two updates 0.45
 (the tyres' own 0.82); with the common fit taken from two
 observable tyres on, a class D run's front tyre at its placard, read 26 % low at σ 17 kPa
-beside the low one, was warned: hence all of them, three or more.
+beside the low one, was warned: hence all of them, three or more. Where the radii are fused
+(below) and a tyre is not observable, the fit takes every tyre's fused estimate, with the
+fusion's covariance, where three are observable (:func:`_common_fit`): a tyre whose windows were
+refused (rough) is tied to the others by its radius, to within the tyres' spread, and the χ² then
+also tests the radii's contrasts. Where all are observable the fit stays the vibration estimates'
+(the spread of their upper tails, as each tyre's own probability): with the fused estimates there
+too (their symmetric σ), the ``reset_leak`` runs' all four warned in 3 of 8 instead of 4. With
+one tyre model slope for all, a common r moves no excess, so the fit's r is the vibration
+estimates' own least-squares mean, the refused tyre's at its wide σ: the radii add the tie and
+the test, not a level. A tyre neither observable
+nor fused has only the monitor's prior, the same for every tyre, whose error no correlation here
+describes: it is never fitted. On the MuJoCo ``warning`` runs (2026-12-03) all four low warned
+in 19 of 20 (17 with every tyre observable required; class D runs with a rear's windows refused),
+no warning on an inflated tyre; ``nominal_long``: no warning, the common loss's highest
+probability held on two updates 0.45 (as before; over the 182 updates of 80 runs fitted over the
+fused estimates at most 0.48, held 0.35); ``reset_leak``: the same 90 %.
 
 **The wheels' rolling radii.** Given the radius analysis (:class:`RadiusEvidence`, from
 :class:`suvtwin.estimators.rolling_radius.RollingRadius`), every row's estimates are fused with it
@@ -77,7 +92,7 @@ tyre that has since lost ``detect_fraction`` more than the others' mean warns on
 (:func:`_relative_loss`, ``relative_probability``, ``warning_relative``): before the vibration has
 learned any reference, as production wheel-speed systems do after their reset. A row counts for
 the confirmation where the tyre is observable, fused or compared. On the MuJoCo ``warning`` runs
-(placard, spread 1 ‰, 2026-12-03): warned within 60 s 94 % (one tyre 77 of 80, all four 17 of 20;
+(placard, spread 1 ‰, 2026-12-03): warned within 60 s 96 % (one tyre 77 of 80, all four 19 of 20;
 88 % without the radii), no warning on an inflated tyre; ``nominal_long`` (506 min): no false
 warning, the highest probability held 0.55;
 ``reset_leak`` (learned references, a 20 % leak after 150–180 s): one tyre warned within 60 s of
@@ -180,9 +195,10 @@ class DeflationRule:
 @dataclass(frozen=True)
 class DeflationWarnings:
     """Per update and tyre: reference (kPa, NaN until known), probability of a loss beyond the
-    detection fraction, latched warning; per update: the probability that the observable tyres'
-    common relative pressure is that low (`common_probability`, NaN where not every tyre with a
-    reference is observable, fewer than three are, or the test that they share it fails); per
+    detection fraction, latched warning; per update: the probability that the tyres' common
+    relative pressure is that low (`common_probability`, NaN where fewer than three are observable,
+    where a tyre with a reference is neither observable nor fused with the radii, or where the test
+    that they share it fails); per
     tyre: the warning's time (s, NaN: none), and the probability, estimate and reference (kPa)
     that set it, and whether the common loss set it (`warning_common`)."""
 
@@ -327,6 +343,7 @@ def deflation_warnings(
     w_common = np.zeros(n_c, dtype=bool)
     keep = 1.0 - rule.detect_fraction
     fused, fused_sd = np.full((n_k, n_c), np.nan), np.full((n_k, n_c), np.nan)
+    fused_cov = np.full((n_k, n_c, n_c), np.nan)  # the fused estimates' covariance, kPa²
     model_fused = None
     if radius is not None:
         radius.check(n_k, n_c)
@@ -363,6 +380,7 @@ def deflation_warnings(
         if model_fused is not None and np.isfinite(model_fused.pressure_kpa[k]).all():
             # against the tyre model within the tyres' spread: a placard reference decides on it
             fused[k], fused_sd[k] = model_fused.pressure_kpa[k], model_fused.sigma_kpa[k]
+            fused_cov[k] = model_fused.cov_kpa2[k]
             if placard_kpa is not None:
                 for c in range(n_c):
                     prob[k, c] = _below(keep * ref_now[c], fused[k, c], fused_sd[k, c])
@@ -373,16 +391,19 @@ def deflation_warnings(
                 calibration = (radius.excess[k].copy(), excess_cov(wheel_sd(radius.sigma[k])))
             sd_k = sig[k] if radius.lag_kpa is None else np.hypot(sig[k], radius.lag_kpa[k])
             fused[k], cov = _fuse_radius(p[k], sd_k, rho, ref_now, radius, k, calibration, ref_sig)
-            fused_sd[k] = np.sqrt(np.diag(cov))
+            fused_sd[k], fused_cov[k] = np.sqrt(np.diag(cov)), cov
             for c in range(n_c):  # cov is the loss's, p − reference: the reference's σ is in it
                 prob[k, c] = _below(keep * ref_now[c], fused[k, c], fused_sd[k, c])
             informed[:] = True
-        # the common loss is the whole car's: every tyre with a reference observable, three or more
+        # the common loss is the whole car's: three or more tyres observable, and every tyre with a
+        # reference either observable or, fused with the radii, tied to the others (_common_fit)
         inside = obs[k] & np.isfinite(rel)
-        known = ~np.isnan(ref_now)
-        if rule.common_alpha is not None and np.count_nonzero(inside) >= 3 and np.all(inside[known]):
-            common[k] = _common_loss(rel[inside], rel_sd[inside], rho[np.ix_(inside, inside)], keep,
-                                     rule.common_alpha)  # fmt: skip
+        if rule.common_alpha is not None:
+            scale = np.outer(ref_now, ref_now)
+            fit = _common_fit(inside, rel, rel_sd, rho, fused[k] / ref_now, fused_cov[k] / scale)
+            if fit is not None:
+                inside, u, cov_u = fit
+                common[k] = _common_loss(u, cov_u, keep, rule.common_alpha)
         for c in range(n_c):
             apart = relative[k, c] >= rule.probability  # NaN: no
             if np.isnan(ref_now[c]) and np.isnan(relative[k, c]):
@@ -419,16 +440,36 @@ def _relative_loss(radius: RadiusEvidence, k: int, early, fraction: float) -> np
     return scipy.special.ndtr((deficit - gain * fraction * p0) / spread)
 
 
-def _common_loss(rel: np.ndarray, sd: np.ndarray, rho: np.ndarray, keep: float, alpha: float) -> float:
+def _common_fit(inside, rel, rel_sd, rho, fused_rel, fused_cov):
+    r"""Which tyres the common loss is fitted over at a row, and with what: None (no fit), or the
+    tyres (C,) bool, their relative pressures and its covariance; three or more observable
+    (`inside`) in any case. Where every tyre with a reference (`rel` finite) is observable: those,
+    each vibration estimate `rel` ± `rel_sd` (the spread of its upper tail, as the tyre's own
+    probability) correlated by `rho`. Else, where every tyre's estimate fused with the radii is known
+    (`fused_rel` (C,): over its reference, `fused_cov` (C, C) its covariance, relative): all of them,
+    fused — the radii tie a tyre whose windows were refused to the others (its contrast to them, to
+    within the tyres' spread), and the fusion's covariance carries that tie. A tyre that is neither
+    observable nor fused has only the monitor's prior, the same for every tyre: its error is not one
+    `rho` describes, so it is never fitted."""
+    known = np.isfinite(rel)
+    if np.count_nonzero(inside) < 3:
+        return None
+    if np.all(inside[known]):
+        return inside, rel[inside], rho[np.ix_(inside, inside)] * np.outer(rel_sd[inside], rel_sd[inside])
+    if np.all(known) and np.all(np.isfinite(fused_rel)) and np.all(np.isfinite(fused_cov)):
+        return known, fused_rel, fused_cov
+    return None
+
+
+def _common_loss(rel: np.ndarray, cov: np.ndarray, keep: float, alpha: float) -> float:
     r"""Probability that tyres sharing one relative pressure r have it below `keep`, or NaN where
     the test that they share it fails at level `alpha`.
 
-    `rel` (n,): each tyre's estimate over its reference; `sd` (n,): its spread; `rho` (n, n): the
-    errors' correlation. Generalized least squares with covariance Σ = ρ ∘ sd sdᵀ:
+    `rel` (n,): each tyre's estimate over its reference; `cov` (n, n): their errors' covariance
+    Σ (relative). Generalized least squares:
     :math:`\hat r = 1^T\Sigma^{-1}u / 1^T\Sigma^{-1}1`, :math:`\mathrm{var}\,\hat r = 1/1^T\Sigma^{-1}1`;
     the fit's :math:`\chi^2 = (u - \hat r)^T\Sigma^{-1}(u - \hat r)` with n − 1 degrees of freedom
     tests that one r explains them all (Aitken 1935)."""
-    cov = rho * np.outer(sd, sd)
     try:
         inv_one, inv_rel = np.linalg.solve(cov, np.column_stack([np.ones(rel.size), rel])).T
     except np.linalg.LinAlgError:

@@ -419,6 +419,43 @@ def test_fusion_is_blind_to_a_loss_all_four_share_and_honest_in_monte_carlo():
     assert np.all(w.fused_sigma_kpa[0] >= common_sd - 1e-6) and np.all(w.fused_sigma_kpa[0] < sig_v)
 
 
+def test_the_radii_let_the_common_loss_take_a_tyre_whose_windows_were_refused():
+    from suvtwin.estimators.deflation import deflation_warnings
+
+    # all four 20 % below a 230 kPa placard (184 kPa); three read at 184 with σ 12 kPa, the rear
+    # right's windows refused (not observable, at its prior 230 ± 80). Alone each observable tyre has
+    # P = Φ(17.25/12) = 0.925, and the vibration's common fit needs every tyre observable
+    n_k = 4
+    t = np.arange(1, n_k + 1) * 4.0
+    p = np.tile([184.0, 184.0, 184.0, 230.0], (n_k, 1))
+    sig = np.tile([12.0, 12.0, 12.0, 80.0], (n_k, 1))
+    obs = np.tile([True, True, True, False], (n_k, 1))
+    tracks = ((0, 2), (1, 3))
+    assert np.isnan(deflation_warnings(t, p, sig, obs, placard_kpa=230.0, tracks=tracks).warning_time_s).all()
+    # the radii read all four alike (a shared loss leaves every excess 0): the fused estimates with
+    # their covariance. The model is linear with one gain for all, so a common r moves no excess and
+    # the common fit's estimate is the generalized least squares mean of the four vibration
+    # estimates, the refused one at its σ (Aitken 1935): computed here from the vibration alone
+    ev = _evidence(n_k, np.zeros(4), np.full(4, 0.2e-3), 0.1e-3, placard=230.0)
+    w = deflation_warnings(t, p, sig, obs, placard_kpa=230.0, tracks=tracks, radius=ev)
+    rho = np.full((4, 4), 0.15)
+    rho[0, 2] = rho[2, 0] = rho[1, 3] = rho[3, 1] = 0.75
+    np.fill_diagonal(rho, 1.0)
+    info = np.linalg.inv(rho * np.outer(sig[0], sig[0]) / 230.0**2)
+    r_hat = info.sum(axis=0) @ (p[0] / 230.0) / info.sum()
+    expected = 0.5 * math.erfc(-(0.875 - r_hat) * math.sqrt(info.sum()) / math.sqrt(2.0))
+    np.testing.assert_allclose(w.common_probability, expected, rtol=1e-6)
+    assert expected > 0.95
+    # all four warned on the second update, the refused one too (through the car's common loss)
+    assert np.all(w.warning_time_s == t[1]) and w.warning_common[3]
+    # one tyre low, the radii saying so: no common loss is taken
+    d = np.array([-46.0e-4, 0.0, 0.0, 0.0])
+    ev = _evidence(n_k, d - (d.sum() - d) / 3, np.full(4, 0.2e-3), 0.1e-3, placard=230.0)
+    one = np.tile([184.0, 230.0, 230.0, 230.0], (n_k, 1))
+    w = deflation_warnings(t, one, sig, obs, placard_kpa=230.0, tracks=tracks, radius=ev)
+    assert np.isnan(w.common_probability).all() and np.isnan(w.warning_time_s[1:]).all()
+
+
 def test_learned_references_calibrate_the_radii_and_a_later_loss_warns_through_them():
     from suvtwin.estimators.deflation import DeflationRule, deflation_warnings
 
