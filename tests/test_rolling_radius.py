@@ -235,13 +235,11 @@ def test_mujoco_wheel_speeds_read_mf_tyre_rolling_radius():
     assert np.all(np.abs(rows.excess[-1] - expected) < 4 * rows.sigma[-1])
 
 
-@pytest.mark.parametrize("seed", [72, 73])
-def test_on_a_rough_road_samples_with_a_wheel_off_the_ground_are_left_out(seed):
-    """Class D (1.5e-3 m³) at 100 km/h, four pressures: the wheels leave the ground 3–13 % of the
-    time, and a wheel in the air does not roll on its radius. The tyre loads from the two
-    accelerometers (the quarter car's equations summed) against the simulator's true tyre force, and
-    the excess with the samples where a wheel carries under 30 % of its static load left out, against
-    MF-Tyre's R_e at the mean loads: within 0.5 ‰ (all samples: beyond 0.8 ‰ for some wheel)."""
+def _rough_run(seed: int, speed_kmh: float, gd_n0: float, length_m: float) -> dict:
+    """A 28 s MuJoCo run on one class D road with four pressures, from 4 s on: the time, the four
+    wheels' columns (wheel speed, accelerations, true tyre force), the yaw rate and accelerations the
+    radius analysis reads, each sample's tyre load share from the accelerometers
+    (:func:`load_share`), the static loads, the step and MF-Tyre's excess at the mean true loads."""
     from suvtwin.estimators.rolling_radius import load_share
     from suvtwin.mjcf.tire import effective_rolling_radius, load_tire
     from suvtwin.mjcf.vehicle import load_vehicle
@@ -252,8 +250,8 @@ def test_on_a_rough_road_samples_with_a_wheel_off_the_ground_are_left_out(seed):
 
     corners = ("fl", "fr", "rl", "rr")
     sc = parse_scenario(
-        {"duration_s": 28.0, "seed": seed, "speed_kmh": 100.0,
-         "road": {"segments": [{"length_m": 900.0, "gd_n0": 1.5e-3}]},
+        {"duration_s": 28.0, "seed": seed, "speed_kmh": speed_kmh,
+         "road": {"segments": [{"length_m": length_m, "gd_n0": gd_n0}]},
          "pressure_kpa": {"fl": 230.0, "fr": 200.0, "rl": 170.0, "rr": 140.0}},
         source="test",
     )  # fmt: skip
@@ -267,23 +265,37 @@ def test_on_a_rough_road_samples_with_a_wheel_off_the_ground_are_left_out(seed):
     sprung = [corner_sprung_mass(c, vehicle=vehicle) for c in corners]
     a_s, a_u = col["accel_sprung_mps2"], col["accel_unsprung_mps2"]
     share = load_share(a_s, a_u, sprung, vehicle.unsprung_mass, static)
-    fz = col["tire_fz_n"]
+    tp = load_tire().to_array()
+    p = frame[[f"{c}_pressure_kpa" for c in corners]].to_numpy()[-1] * 1e3
+    fz = col["tire_fz_n"].mean(axis=0)
+    radii = [effective_rolling_radius(f, q, tp) for f, q in zip(fz, p, strict=True)]
+    kinematics = ("yaw_rate_radps", "lat_accel_mps2", "long_accel_mps2")
+    return {
+        "t": t[keep], "col": col, "share": share, "static": static, "dt": float(np.median(np.diff(t))),
+        "others": [frame[k].to_numpy()[keep] for k in kinematics],
+        "positions": wheel_positions(vehicle), "expected": excess_of(np.log(radii)),
+    }  # fmt: skip
+
+
+@pytest.mark.parametrize("seed", [72, 73])
+def test_on_a_rough_road_samples_with_a_wheel_off_the_ground_are_left_out(seed):
+    """Class D (1.5e-3 m³) at 100 km/h, four pressures: the wheels leave the ground 3–13 % of the
+    time, and a wheel in the air does not roll on its radius. The tyre loads from the two
+    accelerometers (the quarter car's equations summed) against the simulator's true tyre force, and
+    the excess with the samples where a wheel carries under 30 % of its static load left out, against
+    MF-Tyre's R_e at the mean loads: within 0.5 ‰ (all samples: beyond 0.8 ‰ for some wheel)."""
+    run = _rough_run(seed, 100.0, 1.5e-3, 900.0)
+    share, static, fz = run["share"], run["static"], run["col"]["tire_fz_n"]
     assert np.all(np.mean(fz <= 1.0, axis=0) > 0.02)  # every wheel leaves the ground at times
     resid = np.sqrt(np.mean((share * static - fz) ** 2, axis=0))
     assert np.all(resid < 0.65 * fz.std(axis=0))
     for i in range(4):  # a wheel in the air reads under 30 % of its load
         assert np.mean(share[fz[:, i] <= 1.0, i] < 0.3) > 0.9
-    others = [frame[k].to_numpy()[keep] for k in ("yaw_rate_radps", "lat_accel_mps2", "long_accel_mps2")]
-    tp = load_tire().to_array()
-    p = frame[[f"{c}_pressure_kpa" for c in corners]].to_numpy()[-1] * 1e3
-    radii = [effective_rolling_radius(f, q, tp) for f, q in zip(fz.mean(axis=0), p, strict=True)]
-    expected = excess_of(np.log(radii))
-    dt = float(np.median(np.diff(t)))
-    pos, w = wheel_positions(vehicle), col["wheel_speed_radps"]
-    gated = RollingRadius(pos, dt, R0).update(t[keep], w, *others, load_share=share)
-    every = RollingRadius(pos, dt, R0).update(t[keep], w, *others)
-    assert np.max(np.abs(gated.excess[-1] - expected)) < 0.5e-3
-    assert np.max(np.abs(every.excess[-1] - expected)) > 0.8e-3
+    args = (run["t"], run["col"]["wheel_speed_radps"], *run["others"])
+    gated = RollingRadius(run["positions"], run["dt"], R0).update(*args, load_share=share)
+    every = RollingRadius(run["positions"], run["dt"], R0).update(*args)
+    assert np.max(np.abs(gated.excess[-1] - run["expected"])) < 0.5e-3
+    assert np.max(np.abs(every.excess[-1] - run["expected"])) > 0.8e-3
     assert gated.used.sum() >= every.used.sum()
 
 
@@ -293,46 +305,18 @@ def test_blocks_the_load_gate_thins_to_a_third_are_used_and_stay_accurate(seed):
     Blocks with at least 35 % kept are used (at half, most of them were skipped and a drop of pressure
     there went unseen for 28 s), and the excess from them is within 0.4 ‰ of MF-Tyre's R_e at the mean
     loads, inside 2σ."""
-    from suvtwin.estimators.rolling_radius import RadiusConfig, load_share
-    from suvtwin.mjcf.tire import effective_rolling_radius, load_tire
-    from suvtwin.mjcf.vehicle import load_vehicle
-    from suvtwin.pipeline.estimation import corner_sprung_mass, corner_static_load
-    from suvtwin.pipeline.monitoring import wheel_positions
-    from suvtwin.pipeline.scenario import parse_scenario
-    from suvtwin.pipeline.simulator import simulate
+    from suvtwin.estimators.rolling_radius import RadiusConfig
 
-    corners = ("fl", "fr", "rl", "rr")
-    sc = parse_scenario(
-        {"duration_s": 28.0, "seed": seed, "speed_kmh": 112.0,
-         "road": {"segments": [{"length_m": 1000.0, "gd_n0": 1.2e-3}]},
-         "pressure_kpa": {"fl": 230.0, "fr": 200.0, "rl": 170.0, "rr": 140.0}},
-        source="test",
-    )  # fmt: skip
-    frame = simulate(sc).table
-    vehicle = load_vehicle()
-    t = frame["t_s"].to_numpy()
-    keep = t >= 4.0
-    names = ("wheel_speed_radps", "accel_sprung_mps2", "accel_unsprung_mps2", "tire_fz_n")
-    col = {k: frame[[f"{c}_{k}" for c in corners]].to_numpy()[keep] for k in names}
-    static = np.array([corner_static_load(c, vehicle=vehicle) for c in corners])
-    sprung = [corner_sprung_mass(c, vehicle=vehicle) for c in corners]
-    a_s, a_u = col["accel_sprung_mps2"], col["accel_unsprung_mps2"]
-    share = load_share(a_s, a_u, sprung, vehicle.unsprung_mass, static)
-    dt = float(np.median(np.diff(t)))
-    n = int(round(RadiusConfig().block_s / dt))
-    kept = np.all(share >= RadiusConfig().min_load_share, axis=1)
+    run = _rough_run(seed, 112.0, 1.2e-3, 1000.0)
+    n = int(round(RadiusConfig().block_s / run["dt"]))
+    kept = np.all(run["share"] >= RadiusConfig().min_load_share, axis=1)
     kept_share = kept[: kept.size // n * n].reshape(-1, n).mean(axis=1)
     assert np.all(kept_share < 0.65) and np.mean(kept_share < 0.5) >= 1 / 3  # the gate thins every block
-    others = [frame[k].to_numpy()[keep] for k in ("yaw_rate_radps", "lat_accel_mps2", "long_accel_mps2")]
-    rows = RollingRadius(wheel_positions(vehicle), dt, R0).update(t[keep], col["wheel_speed_radps"], *others,
-                                                                  load_share=share)  # fmt: skip
+    rows = RollingRadius(run["positions"], run["dt"], R0).update(
+        run["t"], run["col"]["wheel_speed_radps"], *run["others"], load_share=run["share"])  # fmt: skip
     assert rows.used.sum() >= 5  # of 6
     assert rows.used[kept_share < 0.5].sum() >= 1  # blocks under half kept are among them
-    tp = load_tire().to_array()
-    p = frame[[f"{c}_pressure_kpa" for c in corners]].to_numpy()[-1] * 1e3
-    fz = col["tire_fz_n"].mean(axis=0)
-    radii = [effective_rolling_radius(f, q, tp) for f, q in zip(fz, p, strict=True)]
-    error = rows.excess[-1] - excess_of(np.log(radii))
+    error = rows.excess[-1] - run["expected"]
     assert np.max(np.abs(error)) < 0.4e-3
     assert np.all(np.abs(error) < 2.0 * rows.sigma[-1])
 
