@@ -69,9 +69,9 @@ also tests the radii's contrasts. Where all are observable the fit stays the vib
 too (their symmetric σ), the ``reset_leak`` runs' all four warned in 3 of 8 instead of 4. With
 one tyre model slope for all, a common r moves no excess, so the fit's r is the vibration
 estimates' own least-squares mean, the refused tyre's at its wide σ: the radii add the tie and
-the test, not a level. A tyre neither observable
-nor fused has only the monitor's prior, the same for every tyre, whose error no correlation here
-describes: it is never fitted. On the MuJoCo ``warning`` runs (2026-12-03) all four low warned
+the test, not a level. A tyre neither observable nor fused has only the monitor's prior, the
+same for every tyre, whose error no correlation here describes: it is never fitted. On the
+MuJoCo ``warning`` runs (2026-12-03) all four low warned
 in 19 of 20 (17 with every tyre observable required; class D runs with a rear's windows refused),
 no warning on an inflated tyre; ``nominal_long``: no warning, the common loss's highest
 probability held on two updates 0.45 (as before; over the 182 updates of 80 runs fitted over the
