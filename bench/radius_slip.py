@@ -2,8 +2,8 @@
 
 Run: ``python bench/radius_slip.py [--set constant] [--runs-dir bench/_runs/<set>] [--runs 100]``;
 prints JSON.
-One process; the cached ``constant`` runs of ``bench/monitor_mujoco.py`` are read (simulated first
-if missing).
+One process; the cached runs of ``bench/monitor_mujoco.py``'s set (``constant`` by default) are read
+(simulated first if missing).
 
 Per run, 4 s block and wheel (the blocks after the first 8 s): the block's mean log-radius excess
 as the radius analysis reads it from the wheel speeds
