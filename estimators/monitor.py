@@ -497,10 +497,12 @@ def _window_loglik(proj, noise, weight, lo, hi, base, gain, slot, lam_lo, lam_hi
     starts from its neighbours' λ̂ extrapolated along the grid; once a step δ is below 0.02 it is
     the last: ℓ (the only sum with logarithms) is evaluated once, where that step starts, and ℓ and
     log I are carried to its end to second order (ℓ + Uδ − Iδ²/2; dlog I/dλ = 2Σwq²(1 − q)/I): two
-    passes over the band per grid point where the start is good. Σ_f w_f log(n_f + s_f) is taken as
-    the logarithm of the product of the (n_f + s_f)^{w_f} (w_f a count; a logarithm per band
-    otherwise), flushed before it could overflow: 2.5 times faster than a logarithm per band, the
-    same ℓ within 1e-12.
+    passes over the band per grid point where the start is good. The sums run in units of the noise
+    beside the signal: per corner, damping and pressure, gain/n and P/n and Σ_f w_f log n_f are
+    taken once and shared by the slopes and iterations. Σ_f w_f log(1 + r_f) is taken as the
+    logarithm of the product of the (1 + r_f)^{w_f} (w_f a count; a logarithm per band otherwise),
+    flushed before it could overflow: 2.5 times faster than a logarithm per band, the same ℓ within
+    1e-12.
 
     `proj` (C, D, F): u^H S u / N of the window (dimensionless); `noise` (C, D, G, F) or empty;
     `weight` (F,): Fourier frequencies per band, nonzero only within [lo, hi); `base` (B, F):
@@ -509,12 +511,39 @@ def _window_loglik(proj, noise, weight, lo, hi, base, gain, slot, lam_lo, lam_hi
     it), compiled and warm-started for the grid."""
     n_c, n_d = proj.shape[0], proj.shape[1]
     n_b, n_g = base.shape[0], gain.shape[2]
+    n_f = hi - lo
     white = noise.shape[0] == 0
+    gn = np.empty((n_g, n_f))  # signal gain over the noise beside it, per pressure and band
+    pn = np.empty((n_g, n_f))  # the window's power over that noise
+    log_n = np.zeros(n_g)  # Σ_f w_f log n_f
+    wi = np.empty(n_f, dtype=np.int64)  # the band weights as counts (0: not a count)
+    for j in range(n_f):
+        wf = weight[lo + j]
+        wi[j] = int(wf) if (int(wf) == wf and 1.0 <= wf <= 16.0) else 0
     for c in range(n_c):
         s = slot[c]
         if s < 0:
             continue
         for d in range(n_d):
+            for g in range(n_g):
+                prod = 1.0
+                logs = 0.0
+                for j in range(n_f):
+                    f = lo + j
+                    n = 1.0 if white else noise[c, d, g, f]
+                    gn[g, j] = gain[s, d, g, f] / n
+                    pn[g, j] = proj[c, d, f] / n
+                    if not white:
+                        k = wi[j]
+                        if k == 0 or n > 1e16:
+                            logs += weight[f] * math.log(n)
+                        else:
+                            for _ in range(k):
+                                prod *= n
+                            if prod > 1e200:
+                                logs += math.log(prod)
+                                prod = 1.0
+                log_n[g] = logs + math.log(prod)
             for b in range(n_b):
                 lam1 = lam2 = 0.0
                 for g in range(n_g):
@@ -524,22 +553,22 @@ def _window_loglik(proj, noise, weight, lo, hi, base, gain, slot, lam_lo, lam_hi
                         lam = lam1
                     else:  # method of moments
                         total = excess = 0.0
-                        for f in range(lo, hi):
-                            n = 1.0 if white else noise[c, d, g, f]
-                            total += weight[f] * base[b, f] * gain[s, d, g, f] / n
-                            excess += weight[f] * max(proj[c, d, f] / n - 1.0, 0.0)
+                        for j in range(n_f):
+                            wf = weight[lo + j]
+                            total += wf * base[b, lo + j] * gn[g, j]
+                            excess += wf * max(pn[g, j] - 1.0, 0.0)
                         lam = math.log(max(excess, 1e-12) / max(total, 1e-300))
                     lam = min(max(lam, lam_lo), lam_hi)
                     level = info = slope = score = step = 0.0
-                    for _ in range(50):  # Fisher scoring: the score and information only
+                    for _ in range(50):
                         level = math.exp(lam)
                         score = info = slope = 0.0
-                        for f in range(lo, hi):
-                            sig = level * base[b, f] * gain[s, d, g, f]
-                            inv = 1.0 / ((1.0 if white else noise[c, d, g, f]) + sig)
-                            q = sig * inv
-                            wf = weight[f]
-                            score += wf * q * (proj[c, d, f] * inv - 1.0)
+                        for j in range(n_f):
+                            r = level * base[b, lo + j] * gn[g, j]
+                            inv = 1.0 / (1.0 + r)
+                            q = r * inv
+                            wf = weight[lo + j]
+                            score += wf * q * (pn[g, j] * inv - 1.0)
                             wq2 = wf * q * q
                             info += wq2
                             slope += wq2 * (1.0 - q)
@@ -549,31 +578,98 @@ def _window_loglik(proj, noise, weight, lo, hi, base, gain, slot, lam_lo, lam_hi
                         lam = new
                         if abs(step) < 0.02:
                             break
-                    # ℓ where the last step started (its logarithms once, not per iteration; a
-                    # logarithm per band cost more than the rest of the kernel) ...
                     quad = logs = 0.0
                     prod = 1.0
-                    for f in range(lo, hi):
-                        power = (1.0 if white else noise[c, d, g, f]) + level * base[b, f] * gain[s, d, g, f]
-                        wf = weight[f]
-                        quad += wf * proj[c, d, f] / power
-                        whole = int(wf)
-                        if power > 1e20 or whole != wf:  # no product could hold it, or not a count
-                            logs += wf * math.log(power)
+                    for j in range(n_f):
+                        one_r = 1.0 + level * base[b, lo + j] * gn[g, j]
+                        wf = weight[lo + j]
+                        quad += wf * pn[g, j] / one_r
+                        k = wi[j]
+                        if k == 0 or one_r > 1e16:
+                            logs += wf * math.log(one_r)
                         else:
-                            for _ in range(whole):
-                                prod *= power
-                                if prod > 1e280:
-                                    logs += math.log(prod)
-                                    prod = 1.0
-                    ll = -(logs + math.log(prod)) - quad
+                            x = one_r
+                            for _ in range(k - 1):
+                                x *= one_r
+                            prod *= x
+                            if prod > 1e200:
+                                logs += math.log(prod)
+                                prod = 1.0
+                    ll = -(log_n[g] + logs + math.log(prod)) - quad
                     if abs(step) < 0.02:
-                        # ... and the last step's gain and the information there, to second order
                         ll += score * step - 0.5 * info * step * step
                         info *= math.exp(2.0 * step * slope / info)
                     out_ll[c, d, b, g] = ll - 0.5 * math.log(max(info, 1e-300))
                     out_lam[c, d, b, g] = lam
                     lam2, lam1 = lam1, lam
+
+
+@cached_njit
+def _redraw(moved, redraw, road, prior_db, prior_full):
+    """The prediction's redraws, in place on the walked posterior `moved` (C, R, D, B, P), then each
+    corner normalized: a share `road` of each regime's mass at each pressure takes the road's prior
+    (damping, slope) `prior_db` (D, B), and a share `redraw` of each regime's mass the whole prior
+    `prior_full` (C, D, B, P) (:meth:`TyreMonitor._predict`)."""
+    n_c, n_r, n_d, n_b, n_p = moved.shape
+    keep = (1.0 - road) * (1.0 - redraw)
+    road_w = (1.0 - redraw) * road
+    total_p = np.empty(n_p)
+    for c in range(n_c):
+        norm = 0.0
+        for r in range(n_r):
+            total_p[:] = 0.0
+            for d in range(n_d):
+                for b in range(n_b):
+                    for p in range(n_p):
+                        total_p[p] += moved[c, r, d, b, p]
+            mass = 0.0
+            for p in range(n_p):
+                mass += total_p[p]
+            for d in range(n_d):
+                for b in range(n_b):
+                    w_db = road_w * prior_db[d, b]
+                    for p in range(n_p):
+                        x = (moved[c, r, d, b, p] * keep + w_db * total_p[p]
+                             + redraw * mass * prior_full[c, d, b, p])
+                        moved[c, r, d, b, p] = x
+                        norm += x
+        inv = 1.0 / norm
+        for r in range(n_r):
+            for d in range(n_d):
+                for b in range(n_b):
+                    for p in range(n_p):
+                        moved[c, r, d, b, p] *= inv
+
+
+@cached_njit
+def _bayes(post, rows, fine):
+    """Bayes' rule in place: corner rows[u]'s posterior `post` (C, R, D, B, P) times exp(fine[u]) (U, D, B, P)
+    (the window's weighted log-likelihood on the 1 kPa grid, shifted by its maximum), normalized; a
+    corner whose product has no finite positive mass keeps its posterior (:meth:`TyreMonitor._correct`)."""
+    n_r, n_d, n_b, n_p = post.shape[1:]
+    like = np.empty((n_d, n_b, n_p))
+    for u in range(rows.size):
+        c = rows[u]
+        top = -np.inf
+        for d in range(n_d):
+            for b in range(n_b):
+                for p in range(n_p):
+                    top = max(top, fine[u, d, b, p])
+        total = 0.0
+        for d in range(n_d):
+            for b in range(n_b):
+                for p in range(n_p):
+                    like[d, b, p] = math.exp(fine[u, d, b, p] - top)
+                    for r in range(n_r):
+                        total += post[c, r, d, b, p] * like[d, b, p]
+        if not (total > 0.0 and math.isfinite(total)):
+            continue
+        inv = 1.0 / total
+        for r in range(n_r):
+            for d in range(n_d):
+                for b in range(n_b):
+                    for p in range(n_p):
+                        post[c, r, d, b, p] = post[c, r, d, b, p] * like[d, b, p] * inv
 
 
 def _logsumexp(a: np.ndarray, axis) -> np.ndarray:
@@ -1185,9 +1281,11 @@ class TyreMonitor:
                     by_wheelbase.setdefault(self.models[c].full_car.wheelbase, []).append(c)
                 by_contact.setdefault(self.models[c].envelope_half_length, []).append(c)
             for wheelbase, same in by_wheelbase.items():
-                g = gain_at_delay(self._car_a[slot[same]], self._car_b[slot[same]], self._fine,
-                                  wheelbase / speed)  # fmt: skip
-                gain[same] = np.add.reduceat(g, self._group_start, axis=-1) / self._group_size
+                n_dg = shape[1] * shape[3]  # a slot's (damping, pressure) rows of the tables
+                picked = (slot[same][:, None] * n_dg + np.arange(n_dg)).ravel()
+                gain[same] = gain_at_delay(self._car_a, self._car_b, self._fine, wheelbase / speed,
+                                           band_start=self._group_start, rows=picked).reshape(
+                    len(same), shape[1], shape[3], -1)  # fmt: skip
             # the tyre's enveloping filters the road it reads: once per contact length
             for half, same in by_contact.items():
                 if half > 0.0:
@@ -1293,12 +1391,7 @@ class TyreMonitor:
             mixed = (markov[0, to] * post[:, 0] + markov[1, to] * post[:, 1]).reshape(-1, n_p)
             moved[:, to] = ((walk @ mixed.T).T if sparse.issparse(walk) else mixed @ walk.T).reshape(
                 post[:, to].shape)  # fmt: skip
-        total_p = moved.sum(axis=(2, 3), keepdims=True)  # (C, R, 1, 1, P)
-        mass = total_p.sum(axis=4, keepdims=True)  # (C, R, 1, 1, 1): the road's redraw keeps it
-        moved *= (1.0 - road) * (1.0 - redraw)
-        moved += ((1.0 - redraw) * road) * self._prior_db[None, None, :, :, None] * total_p
-        moved += redraw * mass * self._prior_full[:, None]
-        moved /= moved.sum(axis=(1, 2, 3, 4), keepdims=True)
+        _redraw(moved, redraw, road, self._prior_db, self._prior_full)
         self._state.post = moved
 
     def _correct(self, ll: np.ndarray, weight: np.ndarray, used: np.ndarray) -> None:
@@ -1311,11 +1404,7 @@ class TyreMonitor:
         if rows.size == 0:
             return
         fine = weight[rows, None, None, None] * (ll[rows] @ self._to_fine.T)  # (U, D, B, P)
-        fine -= fine.max(axis=(1, 2, 3), keepdims=True)
-        post = s.post[rows] * np.exp(fine)[:, None]
-        total = post.sum(axis=(1, 2, 3, 4))
-        ok = (total > 0.0) & np.isfinite(total)
-        s.post[rows[ok]] = post[ok] / total[ok, None, None, None, None]
+        _bayes(s.post, rows.astype(np.int64), fine)
 
     def _moments(self) -> _Fit:
         """The posterior's moments per corner: pressure (kPa) and waviness mean and variance, the

@@ -459,39 +459,40 @@ class RollingRadius:
         n = self._s.filled
         age, mask = self._ages()
         wheels = n >= cfg.trend_min_blocks
-        shapes = [(age, 1.0, n >= 3)]
-        shapes += [(np.maximum(age - k, 0.0), 0.0, (n - 1 - k >= 2)) for k in range(1, m - 2)]
         first = cfg.trend_min_blocks - 1  # a ramp that began: at least trend_min_blocks blocks on it
-        shapes += [(np.minimum(age, k), 1.0, (n - 1 - k >= 1)) for k in range(first, m - 1)]
-        best = np.inf
-        level = level_var = rate = np.zeros(n.size)
-        significant = np.zeros(n.size, dtype=bool)
-        for g, now, enough in shapes:
-            alpha, alpha_var, beta, sigma_beta, ok, rss = self._fit(g, mask, n)
-            ok &= enough
-            sig = ok & wheels & (np.abs(beta) > cfg.trend_z * sigma_beta)
-            if not sig.any() or not ok[wheels].all() or rss[wheels].sum() >= best:
-                continue
-            best = rss[wheels].sum()
-            level, level_var, rate, significant = alpha, alpha_var, -beta * now, sig
-        return level, level_var, rate, significant
+        ended, began = np.arange(1, m - 2), np.arange(first, m - 1)
+        # every shape at once (S, M, C): the line, the ramps that ended k blocks ago, those that began
+        g = np.concatenate([age[None], np.maximum(age[None] - ended[:, None, None], 0.0),
+                            np.minimum(age[None], began[:, None, None])])  # fmt: skip
+        now = np.concatenate([[1.0], np.zeros(ended.size), np.ones(began.size)])
+        enough = np.concatenate([(n >= 3)[None], n[None] - 1 - ended[:, None] >= 2,
+                                 n[None] - 1 - began[:, None] >= 1])  # fmt: skip
+        alpha, alpha_var, beta, sigma_beta, ok, rss = self._fit(g, mask, n)
+        ok &= enough
+        sig = ok & wheels & (np.abs(beta) > cfg.trend_z * sigma_beta)
+        candidate = sig.any(axis=1) & ok[:, wheels].all(axis=1)
+        if not candidate.any():
+            return np.zeros(n.size), np.zeros(n.size), np.zeros(n.size), np.zeros(n.size, dtype=bool)
+        # the least residual sum of squares over the wheels (the first such shape on a tie)
+        j = int(np.argmin(np.where(candidate, rss[:, wheels].sum(axis=1), np.inf)))
+        return alpha[j], alpha_var[j], -beta[j] * now[j], sig[j]
 
     def _fit(self, g: np.ndarray, mask: np.ndarray, n: np.ndarray):
-        """Least squares x = α + β g of each wheel's memory on the regressor `g` (M, C) over `mask`:
+        """Least squares x = α + β g of each wheel's memory on the regressor `g` (…, M, C) over `mask`:
         α (the value where g = 0, the newest block), its variance, β, σ_β, whether it could be fitted
-        (n ≥ 3, g not constant) and the residual sum of squares (:meth:`_trend`)."""
+        (n ≥ 3, g not constant) and the residual sum of squares (:meth:`_trend`), each (…, C)."""
         cfg = self.config
         s = self._s
         count = np.maximum(n, 1)
-        g_bar = np.where(mask, g, 0.0).sum(axis=0) / count
-        x_bar = np.where(mask, s.memory, 0.0).sum(axis=0) / count
-        dg = np.where(mask, g - g_bar, 0.0)
-        s_gg = (dg**2).sum(axis=0)
+        g_bar = np.where(mask, g, 0.0).sum(axis=-2) / count
+        x_bar = np.where(mask, s.memory, 0.0).sum(axis=-2) / count
+        dg = np.where(mask, g - g_bar[..., None, :], 0.0)
+        s_gg = (dg**2).sum(axis=-2)
         ok = (n >= 3) & (s_gg > 1e-12)
         s_gg_safe = np.where(ok, s_gg, 1.0)
-        beta = np.where(ok, (dg * np.where(mask, s.memory - x_bar, 0.0)).sum(axis=0) / s_gg_safe, 0.0)
-        resid = np.where(mask, s.memory - x_bar - beta * (g - g_bar), 0.0)
-        rss = (resid**2).sum(axis=0)
+        beta = np.where(ok, (dg * np.where(mask, s.memory - x_bar, 0.0)).sum(axis=-2) / s_gg_safe, 0.0)
+        resid = np.where(mask, s.memory - x_bar - beta[..., None, :] * (g - g_bar[..., None, :]), 0.0)
+        rss = (resid**2).sum(axis=-2)
         s0 = cfg.prior_block_permille * 1e-3
         s_r2 = (cfg.prior_weight * s0**2 + rss) / (cfg.prior_weight + np.maximum(n - 2, 0))
         alpha = x_bar - beta * g_bar

@@ -56,6 +56,7 @@ References
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, fields
 
@@ -342,6 +343,19 @@ def equivalent_spring_rate(
     return _apply(6, law.values, static, sigma, sigma_velocity)
 
 
+@functools.cache
+def _half_normal_nodes() -> tuple[np.ndarray, np.ndarray]:
+    """Trapezoid nodes x (2001 on [0, 8]) and weights (summing to 1) of the half-normal density of
+    |v|/σ_v (:func:`damper_even_slope`); read-only, made once."""
+    x = np.linspace(0.0, 8.0, 2001)
+    w = np.exp(-0.5 * x**2) * (x[1] - x[0])
+    w[0] *= 0.5
+    w[-1] *= 0.5
+    w = w / w.sum()
+    x.flags.writeable = w.flags.writeable = False
+    return x, w
+
+
 def damper_even_slope(law: SuspensionLaw, sigma_velocity: npt.ArrayLike) -> np.ndarray:
     r"""Slope b (N s/m) of the damper's even part on :math:`|v| - E|v|`, v ~ N(0, σ_v²) (m/s).
 
@@ -352,11 +366,7 @@ def damper_even_slope(law: SuspensionLaw, sigma_velocity: npt.ArrayLike) -> np.n
     Below the knee it is :math:`(c_{c,lo} - c_{r,lo})/2` exactly (negative when rebound damps
     more). 0 for a symmetric damper."""
     sv = np.maximum(np.asarray(sigma_velocity, dtype=float), _SIGMA_FLOOR)
-    x = np.linspace(0.0, 8.0, 2001)
-    w = np.exp(-0.5 * x**2) * (x[1] - x[0])
-    w[0] *= 0.5
-    w[-1] *= 0.5
-    w = w / w.sum()
+    x, w = _half_normal_nodes()
     v = sv[..., None] * x
     even = 0.5 * (damper_force(v, law) + damper_force(-v, law))
     mean_v = v @ w

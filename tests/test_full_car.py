@@ -296,3 +296,24 @@ def test_monitor_reads_four_tyres_of_a_full_car_record():
     sigma = out.pressure_sigma_pa[-1] / 1e3
     assert np.all(np.abs(error) <= 2.5 * sigma), (error, sigma)
     assert np.all(out.observable[-1]) and np.all(sigma < 20.0)
+
+
+def test_gain_at_delay_averaged_over_bands_and_picked_rows_is_the_mean_of_its_frequencies():
+    # banding and row picking (used by the monitor on its gain tables, without copying them) against
+    # numpy's reduceat of the per-frequency gain; the per-frequency gain is checked against the
+    # spectrum above
+    rng = np.random.default_rng(5)
+    f = np.linspace(0.5, 20.0, 40)
+    a_sq = rng.random((3, 5, f.size))
+    cross = rng.standard_normal((3, 5, f.size)) + 1j * rng.standard_normal((3, 5, f.size))
+    start = np.array([0, 1, 2, 6, 10, 25, 39])
+    per_f = gain_at_delay(a_sq, cross, f, 0.17)
+    assert per_f.shape == (3, 5, f.size)
+    sizes = np.diff(np.r_[start, f.size])
+    banded = np.add.reduceat(per_f, start, axis=-1) / sizes
+    np.testing.assert_allclose(gain_at_delay(a_sq, cross, f, 0.17, band_start=start), banded, rtol=1e-13)
+    rows = np.array([14, 0, 7])
+    got = gain_at_delay(a_sq, cross, f, 0.17, band_start=start, rows=rows)
+    np.testing.assert_allclose(got, banded.reshape(15, -1)[rows], rtol=1e-13)
+    with pytest.raises(InputError, match="band_start"):
+        gain_at_delay(a_sq, cross, f, 0.17, band_start=np.array([1, 5]))
