@@ -263,15 +263,16 @@ def vibration_lag_kpa(
     if not (np.isfinite(tau_s) and tau_s > 0.0):
         raise InputError(f"lag decay time must be > 0 s, got {tau_s!r}")
     n_c = g.size
-    out = np.zeros((t_r.size, n_c))
+    if t_b.size == 0:  # no block yet: nothing seen, no lag
+        return np.zeros((t_r.size, n_c))
+    # the changes: each block where a wheel changed and its step is known, decaying from its time on
     rows = np.flatnonzero(ch.any(axis=1))
-    for b in rows[rows > 0]:
-        step = e[b] - e[b - 1]
-        if not np.all(np.isfinite(step)):
-            continue
-        dp = _wheel_steps_kpa(step, g)
-        later = t_r >= t_b[b]
-        out[later] += dp[None, :] * np.exp(-(t_r[later, None] - t_b[b]) / tau_s)
+    rows = rows[rows > 0]
+    steps = e[rows] - e[rows - 1]  # (N, C)
+    rows, steps = rows[np.all(np.isfinite(steps), axis=1)], steps[np.all(np.isfinite(steps), axis=1)]
+    age = t_r[:, None] - t_b[None, rows]  # (K, N)
+    decay = np.where(age >= 0.0, np.exp(-np.maximum(age, 0.0) / tau_s), 0.0)
+    out = decay @ _wheel_steps_kpa(steps, g) if rows.size else np.zeros((t_r.size, n_c))
     at = np.searchsorted(t_b, t_r, side="right") - 1
     if held is not None:
         h = np.asarray(held, dtype=float)
@@ -280,13 +281,11 @@ def vibration_lag_kpa(
     if trend is not None:
         # a first-order lag trails a ramp of rate r by r τ; once the ramp ends, that lag decays as e^(−t/τ)
         rate = np.nan_to_num(np.asarray(trend, dtype=float))
-        ramp = np.zeros((t_b.size, n_c))  # the lag the ramp leaves at each block, and when it was set
-        since = np.full(t_b.size, -np.inf)
-        for b in range(t_b.size):
-            if np.any(rate[b] != 0.0):
-                ramp[b], since[b] = tau_s * _wheel_steps_kpa(rate[b], g), t_b[b]
-            elif b > 0:
-                ramp[b], since[b] = ramp[b - 1], since[b - 1]
+        # the lag the last ramp up to each block leaves, and when it was set (its last block)
+        moving = np.any(rate != 0.0, axis=1)
+        last = np.maximum.accumulate(np.where(moving, np.arange(t_b.size), -1))
+        ramp = np.where((last >= 0)[:, None], tau_s * _wheel_steps_kpa(rate[np.maximum(last, 0)], g), 0.0)
+        since = np.where(last >= 0, t_b[np.maximum(last, 0)], -np.inf)
         now = np.maximum(at, 0)
         decay = np.where(at >= 0, np.exp(-np.maximum(t_r - since[now], 0.0) / tau_s), 0.0)
         active = (at >= 0) & np.any(rate[now] != 0.0, axis=1)

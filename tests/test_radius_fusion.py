@@ -161,6 +161,29 @@ def test_vibration_lag_reads_the_changed_tyre_and_decays():
     np.testing.assert_allclose(lag_h[~during], lag[~during], atol=1e-12)
 
 
+def test_the_lags_of_two_changes_add_and_no_block_yet_gives_none():
+    from suvtwin.estimators.radius_fusion import vibration_lag_kpa
+    from suvtwin.estimators.rolling_radius import excess_of
+
+    gain = np.array([0.09, 0.085, 0.08, 0.085]) * 1e-3
+    t_b = np.arange(1, 21) * 4.0
+    delta = np.zeros((20, 4))
+    delta[5:, 3] = -4e-3  # the rear right 4 ‰ smaller from 24 s on
+    delta[12:, 0] = -2e-3  # then the front left 2 ‰ smaller from 52 s on
+    changes = np.zeros((20, 4), bool)
+    changes[5, 3] = changes[12, 0] = True
+    t_r = np.arange(0.0, 84.0, 2.0)
+    lag = vibration_lag_kpa(t_b, excess_of(delta), changes, gain, t_r, tau_s=30.0)
+    def decayed(step_permille, tyre, t_c):  # the tyre's step, kPa, decaying from its change on
+        return np.where(t_r >= t_c, step_permille * 1e-3 / gain[tyre] * np.exp(-(t_r - t_c) / 30.0), 0.0)
+
+    np.testing.assert_allclose(lag[:, 3], decayed(4.0, 3, 24.0), rtol=1e-12)
+    np.testing.assert_allclose(lag[:, 0], decayed(2.0, 0, 52.0), rtol=1e-12, atol=1e-9)
+    none = vibration_lag_kpa(np.zeros(0), np.zeros((0, 4)), np.zeros((0, 4), bool), gain, t_r,
+                             held=np.zeros((0, 4)), trend=np.zeros((0, 4)))  # fmt: skip
+    np.testing.assert_array_equal(none, np.zeros((t_r.size, 4)))
+
+
 def test_a_stale_vibration_estimate_with_its_lag_lets_the_radii_carry_a_drop():
     """Four tyres at 230 kPa, the rear right dropped to 180: the vibration still reads 230 ± 5 for all;
     with the lag the radii saw (50 kPa) the fused estimate follows the radii and covers the truth,
