@@ -62,6 +62,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 import numpy.typing as npt
+from scipy.special import ndtr
 
 from suvtwin.errors import InputError
 from suvtwin.jit import cached_njit
@@ -343,36 +344,31 @@ def equivalent_spring_rate(
     return _apply(6, law.values, static, sigma, sigma_velocity)
 
 
-@functools.cache
-def _half_normal_nodes() -> tuple[np.ndarray, np.ndarray]:
-    """Trapezoid nodes x (2001 on [0, 8]) and weights (summing to 1) of the half-normal density of
-    |v|/σ_v (:func:`damper_even_slope`); read-only, made once."""
-    x = np.linspace(0.0, 8.0, 2001)
-    w = np.exp(-0.5 * x**2) * (x[1] - x[0])
-    w[0] *= 0.5
-    w[-1] *= 0.5
-    w = w / w.sum()
-    x.flags.writeable = w.flags.writeable = False
-    return x, w
-
-
 def damper_even_slope(law: SuspensionLaw, sigma_velocity: npt.ArrayLike) -> np.ndarray:
     r"""Slope b (N s/m) of the damper's even part on :math:`|v| - E|v|`, v ~ N(0, σ_v²) (m/s).
 
-    :math:`F_e(v) = (F_d(v) + F_d(-v))/2` depends on |v| only; b is its least-squares slope on
-    |v|, :math:`\mathrm{Cov}(F_e, |v|)/\mathrm{Var}|v|`, by the trapezoid rule over the half-normal
-    density of |v| (2001 points to 8σ_v; F_e has a kink at the knee, which Gauss–Hermite resolves
-    poorly).
-    Below the knee it is :math:`(c_{c,lo} - c_{r,lo})/2` exactly (negative when rebound damps
-    more). 0 for a symmetric damper."""
+    :math:`F_e(v) = (F_d(v) + F_d(-v))/2` depends on a = |v| only; b is its least-squares slope on
+    a, :math:`\mathrm{Cov}(F_e, a)/\mathrm{Var}\,a`. With :func:`damper_force`'s knee at
+    :math:`v_k`, :math:`F_e = \alpha a - \beta (a - v_k)^+`, α = (c_{c,lo} − c_{r,lo})/2 and
+    β = ((c_{c,lo} − c_{c,hi}) − (c_{r,lo} − c_{r,hi}))/2; a is half-normal, and with κ = v_k/σ_v,
+    φ the standard normal density and Q its upper tail (the partial moments of the normal law):
+    :math:`\mathrm{Var}\,a = \sigma_v^2(1 - 2/\pi)`, :math:`E a = \sigma_v\sqrt{2/\pi}`,
+    :math:`E(a - v_k)^+ = 2\sigma_v(\varphi(\kappa) - \kappa Q(\kappa))`,
+    :math:`E[a (a - v_k)^+] = 2\sigma_v^2 Q(\kappa)`, so
+
+    .. math:: b = \alpha - \beta\,\frac{2Q(\kappa) - 2\sqrt{2/\pi}\,(\varphi(\kappa)
+       - \kappa Q(\kappa))}{1 - 2/\pi}.
+
+    Below the knee (κ → ∞) it is α exactly (negative when rebound damps more); 0 for a symmetric
+    damper. Closed form: exact, where the trapezoid rule it replaces had to resolve the kink."""
     sv = np.maximum(np.asarray(sigma_velocity, dtype=float), _SIGMA_FLOOR)
-    x, w = _half_normal_nodes()
-    v = sv[..., None] * x
-    even = 0.5 * (damper_force(v, law) + damper_force(-v, law))
-    mean_v = v @ w
-    cov = ((v - mean_v[..., None]) * even) @ w
-    var = ((v - mean_v[..., None]) ** 2) @ w
-    return cov / var
+    alpha = 0.5 * (law.compression_low - law.rebound_low)
+    beta = 0.5 * ((law.compression_low - law.compression_high) - (law.rebound_low - law.rebound_high))
+    kappa = law.knee_velocity / sv
+    tail = ndtr(-kappa)
+    density = np.exp(-0.5 * kappa**2) / math.sqrt(2.0 * math.pi)
+    cov = 2.0 * tail - 2.0 * math.sqrt(2.0 / math.pi) * (density - kappa * tail)  # Cov((a − v_k)⁺, a)/σ²
+    return alpha - beta * cov / (1.0 - 2.0 / math.pi)
 
 
 def damper_hermite(
@@ -402,6 +398,21 @@ def damper_hermite(
     return coef, (force * damper_force(sv[..., None] * x, law)).sum(axis=-1)
 
 
+def _cosines(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """cos(2π a_i b_j) (A, B), read-only: the cosine transforms' tables, made once per pair of axes
+    (a monitor calls with the same frequencies and lags every window)."""
+    a, b = np.ascontiguousarray(a, dtype=float), np.ascontiguousarray(b, dtype=float)
+    return _cosine_table(a.tobytes(), b.tobytes())
+
+
+@functools.lru_cache(maxsize=32)
+def _cosine_table(a: bytes, b: bytes) -> np.ndarray:
+    x, y = np.frombuffer(a), np.frombuffer(b)
+    table = np.cos(2.0 * np.pi * x[:, None] * y[None, :])
+    table.flags.writeable = False
+    return table
+
+
 def _lag_correlation(
     f_in, psd, df, f_out, max_lag_s: float
 ) -> tuple[np.ndarray, float, np.ndarray, np.ndarray]:
@@ -413,7 +424,7 @@ def _lag_correlation(
     d_tau = 1.0 / (8.0 * top)
     tau = np.arange(0.0, max_lag_s + 0.5 * d_tau, d_tau)
     psd = np.asarray(psd, dtype=float) * np.asarray(df, dtype=float)
-    cov = psd @ np.cos(2.0 * np.pi * f_in[:, None] * tau[None, :])
+    cov = psd @ _cosines(f_in, tau)
     var = np.maximum(cov[..., :1], 1e-300)
     return tau, d_tau, var, np.clip(cov / var, -1.0, 1.0)
 
@@ -427,7 +438,7 @@ def _lag_window_psd(cov: np.ndarray, tau: np.ndarray, d_tau: float, max_lag_s: f
     weight = np.full(tau.size, d_tau) * parzen
     weight[0] *= 0.5
     f_out = np.asarray(f_out, dtype=float)
-    return 4.0 * (cov * weight) @ np.cos(2.0 * np.pi * tau[:, None] * f_out[None, :])
+    return 4.0 * (cov * weight) @ _cosines(tau, f_out)
 
 
 def damper_residual_psd(
