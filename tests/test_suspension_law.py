@@ -157,6 +157,29 @@ def test_damper_even_slope_against_a_sampled_regression():
         assert damper_even_slope(law, sigma) == pytest.approx(slope, rel=0.01)
 
 
+def test_damper_even_slope_closed_form_against_adaptive_quadrature():
+    # Cov(F_e, |v|)/Var|v| by scipy's adaptive quadrature over the half-normal density, split at the knee
+    from scipy import integrate
+
+    law = LAWS[0]
+
+    def even(a):
+        return 0.5 * (damper_force(a, law) + damper_force(-a, law))
+
+    def moment(fn, sigma):
+        def integrand(a):
+            return fn(a) * 2.0 * np.exp(-0.5 * (a / sigma) ** 2) / (sigma * np.sqrt(2.0 * np.pi))
+
+        parts = ((0.0, law.knee_velocity), (law.knee_velocity, np.inf))
+        return sum(integrate.quad(integrand, lo, hi, epsabs=0.0, epsrel=1e-12)[0] for lo, hi in parts)
+
+    for sigma in (0.02, 0.13, 0.4, 2.0):
+        mean_a = moment(lambda a: a, sigma)
+        cov = moment(lambda a: a * even(a), sigma) - mean_a * moment(even, sigma)
+        slope = cov / (moment(lambda a: a * a, sigma) - mean_a**2)
+        assert damper_even_slope(law, sigma) == pytest.approx(slope, rel=1e-8), sigma
+
+
 def _body_and_hop_process(rng, fs: float, n: int, *, hop_hz: float, hop_width_hz: float) -> np.ndarray:
     """n samples at fs of a Gaussian process whose PSD has a hop-like peak (Gaussian, at hop_hz)
     and half as high a body-like one at 1.5 Hz: random-phase spectrum, inverse FFT."""
