@@ -495,14 +495,14 @@ def _window_loglik(proj, noise, weight, lo, hi, base, gain, slot, lam_lo, lam_hi
     1)`, information :math:`I = \sum w q^2`); out_ll = ℓ(λ̂) − ½ log I(λ̂) (Laplace's integral over λ
     with a flat prior, up to a constant common to the whole grid), out_lam = λ̂. Each pressure
     starts from its neighbours' λ̂ extrapolated along the grid; once a step δ is below 0.02 it is
-    the last: ℓ (the only sum with logarithms) is evaluated once, where that step starts, and ℓ and
-    log I are carried to its end to second order (ℓ + Uδ − Iδ²/2; dlog I/dλ = 2Σwq²(1 − q)/I): two
-    passes over the band per grid point where the start is good. The sums run in units of the noise
-    beside the signal: per corner, damping and pressure, gain/n and P/n and Σ_f w_f log n_f are
-    taken once and shared by the slopes and iterations. Σ_f w_f log(1 + r_f) is taken as the
-    logarithm of the product of the (1 + r_f)^{w_f} (w_f a count; a logarithm per band otherwise),
-    flushed before it could overflow: 2.5 times faster than a logarithm per band, the same ℓ within
-    1e-12.
+    the last: ℓ, taken in the same pass as the score where that step starts, and log I are carried
+    to its end to second order (ℓ + Uδ − Iδ²/2; dlog I/dλ = 2Σwq²(1 − q)/I): one pass over the band
+    per grid point where the start is good (1.07 on average on a class C run). The sums run in
+    units of the noise beside the signal: per corner, damping and pressure, gain/n and P/n and
+    Σ_f w_f log n_f are taken once and shared by the slopes and iterations. Σ_f w_f log(1 + r_f) is
+    taken as the logarithm of the product of the (1 + r_f)^{w_f} (w_f a count; a logarithm per band
+    otherwise), flushed before it could overflow: 2.5 times faster than a logarithm per band, the
+    same ℓ within 1e-12.
 
     `proj` (C, D, F): u^H S u / N of the window (dimensionless); `noise` (C, D, G, F) or empty;
     `weight` (F,): Fourier frequencies per band, nonzero only within [lo, hi); `base` (B, F):
@@ -559,42 +559,43 @@ def _window_loglik(proj, noise, weight, lo, hi, base, gain, slot, lam_lo, lam_hi
                             excess += wf * max(pn[g, j] - 1.0, 0.0)
                         lam = math.log(max(excess, 1e-12) / max(total, 1e-300))
                     lam = min(max(lam, lam_lo), lam_hi)
-                    level = info = slope = score = step = 0.0
+                    level = info = slope = score = step = quad = logs = 0.0
+                    prod = 1.0
                     for _ in range(50):
+                        # the score, information and ℓ at λ in one pass (ℓ is needed where the last step
+                        # starts; a separate pass for it cost as much as the scoring)
                         level = math.exp(lam)
-                        score = info = slope = 0.0
+                        score = info = slope = quad = logs = 0.0
+                        prod = 1.0
                         for j in range(n_f):
                             r = level * base[b, lo + j] * gn[g, j]
-                            inv = 1.0 / (1.0 + r)
+                            one_r = 1.0 + r
+                            inv = 1.0 / one_r
                             q = r * inv
                             wf = weight[lo + j]
-                            score += wf * q * (pn[g, j] * inv - 1.0)
+                            pi = pn[g, j] * inv
+                            score += wf * q * (pi - 1.0)
                             wq2 = wf * q * q
                             info += wq2
                             slope += wq2 * (1.0 - q)
+                            quad += wf * pi
+                            k = wi[j]
+                            if k == 0 or one_r > 1e16:
+                                logs += wf * math.log(one_r)
+                            else:
+                                x = one_r
+                                for _ in range(k - 1):
+                                    x *= one_r
+                                prod *= x
+                                if prod > 1e200:
+                                    logs += math.log(prod)
+                                    prod = 1.0
                         info = max(info, 1e-300)
                         new = min(max(lam + min(max(score / info, -2.0), 2.0), lam_lo), lam_hi)
                         step = new - lam
                         lam = new
                         if abs(step) < 0.02:
                             break
-                    quad = logs = 0.0
-                    prod = 1.0
-                    for j in range(n_f):
-                        one_r = 1.0 + level * base[b, lo + j] * gn[g, j]
-                        wf = weight[lo + j]
-                        quad += wf * pn[g, j] / one_r
-                        k = wi[j]
-                        if k == 0 or one_r > 1e16:
-                            logs += wf * math.log(one_r)
-                        else:
-                            x = one_r
-                            for _ in range(k - 1):
-                                x *= one_r
-                            prod *= x
-                            if prod > 1e200:
-                                logs += math.log(prod)
-                                prod = 1.0
                     ll = -(log_n[g] + logs + math.log(prod)) - quad
                     if abs(step) < 0.02:
                         ll += score * step - 0.5 * info * step * step
@@ -602,6 +603,25 @@ def _window_loglik(proj, noise, weight, lo, hi, base, gain, slot, lam_lo, lam_hi
                     out_ll[c, d, b, g] = ll - 0.5 * math.log(max(info, 1e-300))
                     out_lam[c, d, b, g] = lam
                     lam2, lam1 = lam1, lam
+
+
+@cached_njit
+def _mix_walk_banded(post, w_steady, w_changing, indptr, indices, data, moved, to):
+    """moved[:, to] = the regimes' mixture w_steady post[:, 0] + w_changing post[:, 1] walked along
+    pressure by a banded walk (CSR rows: to, columns: from), in one pass over `post` (C, R, D, B, P)
+    (:meth:`TyreMonitor._predict`)."""
+    n_c, _, n_d, n_b, n_p = post.shape
+    mixed = np.empty(n_p)
+    for c in range(n_c):
+        for d in range(n_d):
+            for b in range(n_b):
+                for p in range(n_p):
+                    mixed[p] = w_steady * post[c, 0, d, b, p] + w_changing * post[c, 1, d, b, p]
+                for i in range(n_p):
+                    acc = 0.0
+                    for k in range(indptr[i], indptr[i + 1]):
+                        acc += data[k] * mixed[indices[k]]
+                    moved[c, to, d, b, i] = acc
 
 
 @cached_njit
@@ -936,10 +956,10 @@ class TyreMonitor:
         return slot
 
     def _tables_for(self, corners: np.ndarray, spec: np.ndarray):
-        """Gain-table slots for spectra `spec` (..., F, 3) of corners `corners` (same leading shape),
-        the share of time the linearization's Gaussian travel spends on a stop or the wheel off
-        the ground (0 for corners without a suspension law), the suspension rate (N/m) and the
-        tyre's contact share: four arrays of that shape.
+        """Gain-table slots for spectra `spec` (U, F, 3) of corners `corners` (U,), the share of time
+        the linearization's Gaussian travel spends on a stop or the wheel off the ground (0 for
+        corners without a suspension law), the suspension rate (N/m) and the tyre's contact share:
+        four (U,) arrays.
 
         A corner whose model has a suspension law gets the tables of its equivalent rate
         (:func:`suvtwin.suspension_law.equivalent_spring_rate`) at the travel's and travel
@@ -961,26 +981,33 @@ class TyreMonitor:
         var_v = rel @ self._travel_weight
         var_x = rel @ self._travel_x_weight
         log_step = math.log1p(self.config.rate_step)
-        for c in np.unique(corners):
-            qc = self.models[c]
-            if qc.suspension is None:
-                continue
-            here = corners == c
-            sub = spec[here]
-            ms, mu = qc.sprung_mass, qc.unsprung_mass
-            load = ms**2 * sub[..., 0].real + mu**2 * sub[..., 1].real + 2.0 * ms * mu * sub[..., 2].real
-            var_f = np.maximum(load - (ms**2 + mu**2) * self.noise, 0.0) @ self._band_df
-            contact = ndtr((ms + mu) * _GRAVITY / np.sqrt(np.maximum(var_f, 1e-12)))
-            lift = np.rint(-np.log(np.maximum(contact, 0.05)) / log_step).astype(int)
-            sd = np.sqrt(var_x[here])
-            mean, k_eq = equivalent_spring_rate(qc.suspension, qc.static_travel, sd, np.sqrt(var_v[here]))
-            steps = np.rint(np.log(np.maximum(k_eq / qc.spring_rate, 1e-3)) / log_step).astype(int)
-            out[here] = [self._slot(int(c), int(k), int(j)) for k, j in zip(steps, lift, strict=True)]
-            law = qc.suspension
-            stops = ndtr((mean - law.bump_clearance) / np.maximum(sd, 1e-9)) + ndtr(
-                (-mean - law.rebound_clearance) / np.maximum(sd, 1e-9))  # fmt: skip
-            share[here] = stops + (1.0 - contact)
-            rate[here], touch[here] = k_eq, contact
+        has_law = np.array([self.models[c].suspension is not None for c in corners], dtype=bool)
+        if not has_law.any():
+            return out, share, rate, touch
+        # every corner at once (the corners' masses, travels and clearances as arrays), one
+        # equivalent-rate call per suspension law
+        at = [self.models[c] for c in corners]
+        ms = np.array([qc.sprung_mass for qc in at])[:, None]
+        mu = np.array([qc.unsprung_mass for qc in at])[:, None]
+        load = ms**2 * spec[..., 0].real + mu**2 * spec[..., 1].real + 2.0 * ms * mu * spec[..., 2].real
+        var_f = np.maximum(load - (ms**2 + mu**2) * self.noise, 0.0) @ self._band_df
+        contact = ndtr((ms[:, 0] + mu[:, 0]) * _GRAVITY / np.sqrt(np.maximum(var_f, 1e-12)))
+        lift = np.rint(-np.log(np.maximum(contact, 0.05)) / log_step).astype(int)
+        sd = np.sqrt(var_x)
+        mean, k_eq = np.zeros(corners.size), rate.copy()
+        for law in {qc.suspension for qc in at if qc.suspension is not None}:
+            same = [i for i, qc in enumerate(at) if qc.suspension == law]
+            static = np.array([at[i].static_travel for i in same])
+            mean[same], k_eq[same] = equivalent_spring_rate(law, static, sd[same], np.sqrt(var_v[same]))
+        steps = np.rint(np.log(np.maximum(k_eq / rate, 1e-3)) / log_step).astype(int)
+        bump = np.array([qc.suspension.bump_clearance if qc.suspension else np.inf for qc in at])
+        rebound = np.array([qc.suspension.rebound_clearance if qc.suspension else np.inf for qc in at])
+        stops = ndtr((mean - bump) / np.maximum(sd, 1e-9)) + ndtr((-mean - rebound) / np.maximum(sd, 1e-9))
+        for i in np.flatnonzero(has_law):
+            out[i] = self._slot(int(corners[i]), int(steps[i]), int(lift[i]))
+        share = np.where(has_law, stops + (1.0 - contact), share)
+        rate = np.where(has_law, k_eq, rate)
+        touch = np.where(has_law, contact, touch)
         return out, share, rate, touch
 
     # ------------------------------------------------------------------ state
@@ -1388,9 +1415,12 @@ class TyreMonitor:
         moved = np.empty_like(post)
         n_p = post.shape[-1]
         for to, walk in enumerate(walks):  # (to, from): a banded (sparse) or dense product per regime
-            mixed = (markov[0, to] * post[:, 0] + markov[1, to] * post[:, 1]).reshape(-1, n_p)
-            moved[:, to] = ((walk @ mixed.T).T if sparse.issparse(walk) else mixed @ walk.T).reshape(
-                post[:, to].shape)  # fmt: skip
+            if sparse.issparse(walk):
+                _mix_walk_banded(post, markov[0, to], markov[1, to], walk.indptr, walk.indices, walk.data,
+                                 moved, to)  # fmt: skip
+            else:
+                mixed = markov[0, to] * post[:, 0] + markov[1, to] * post[:, 1]
+                moved[:, to] = (mixed.reshape(-1, n_p) @ walk.T).reshape(mixed.shape)
         _redraw(moved, redraw, road, self._prior_db, self._prior_full)
         self._state.post = moved
 
