@@ -365,3 +365,37 @@ def test_window_kernel_matches_the_joint_estimators_profile_likelihood(weights, 
                 ref = ref[0, 0] - np.log(n) @ weight - 0.5 * np.log(fisher[0, 0])
                 np.testing.assert_allclose(lam[0, d, b, g], ref_lam[0, 0], atol=2e-3)
                 np.testing.assert_allclose(ll[0, d, b, g], ref, atol=1e-3, rtol=1e-7)
+
+
+def test_the_compiled_prediction_and_bayes_steps_equal_their_definitions():
+    # the filter's prediction (regimes mixed, each walked along pressure, the redraws) and Bayes' rule
+    # against the same maths written as plain array expressions (dense walks; einsum)
+    from suvtwin.estimators import monitor as mon
+
+    rng = np.random.default_rng(11)
+    m = TyreMonitor([LinearQuarterCar(sprung_mass=450.0, unsprung_mass=52.75, spring_rate=45e3,
+                                      damping=3000.0)] * 2, dt=1e-3)  # fmt: skip
+    post = rng.random(m._state.post.shape) ** 4
+    post /= post.sum(axis=(1, 2, 3, 4), keepdims=True)
+    m._state.post = post.copy()
+    m._predict(4.0)
+    markov, walks, redraw, road = m._kernel(4.0)
+    dense = [w.toarray() if hasattr(w, "toarray") else w for w in walks]
+    mixed = np.einsum("rt,crdbp->ctdbp", markov, post)
+    moved = np.stack([np.einsum("qp,cdbp->cdbq", dense[t], mixed[:, t]) for t in range(2)], axis=1)
+    total_p = moved.sum(axis=(2, 3), keepdims=True)
+    prior_db = m._prior_db[None, None, :, :, None]
+    expect = ((1 - road) * (1 - redraw) * moved + (1 - redraw) * road * prior_db * total_p
+              + redraw * total_p.sum(axis=4, keepdims=True) * m._prior_full[:, None])  # fmt: skip
+    expect /= expect.sum(axis=(1, 2, 3, 4), keepdims=True)
+    np.testing.assert_allclose(m._state.post, expect, rtol=1e-10, atol=1e-300)
+    # Bayes: corner 1 only; corner 0 untouched; a likelihood with no finite mass leaves a posterior as it was
+    before = m._state.post.copy()
+    fine = rng.normal(0.0, 3.0, (1,) + before.shape[2:])
+    mon._bayes(m._state.post, np.array([1]), fine)
+    like = np.exp(fine[0] - fine[0].max())
+    expect1 = before[1] * like[None]
+    np.testing.assert_allclose(m._state.post[1], expect1 / expect1.sum(), rtol=1e-12)
+    np.testing.assert_array_equal(m._state.post[0], before[0])
+    mon._bayes(m._state.post, np.array([0]), np.full((1,) + before.shape[2:], np.nan))
+    np.testing.assert_array_equal(m._state.post[0], before[0])
