@@ -134,6 +134,9 @@ class LinearQuarterCar:
       length along the track (enveloping over the contact patch, :func:`envelope_power`); an
       estimator that knows the speed multiplies the road's PSD by the mean's power gain (the
       online monitor does). 0: a point contact.
+    - ``static_load`` (N): the tyre's static vertical force, the car's weight shared by its centre
+      of gravity (loads included); None: (m_s + m_us) g. The online monitor's tyre-contact share
+      compares the dynamic wheel load with it.
     """
 
     sprung_mass: float
@@ -149,6 +152,7 @@ class LinearQuarterCar:
     full_car: FullCar | None = None
     corner: int = 0
     envelope_half_length: float = 0.0
+    static_load: float | None = None
 
 
 @dataclass(frozen=True)

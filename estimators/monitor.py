@@ -967,8 +967,10 @@ class TyreMonitor:
         S11 + S22 − 2 Re S12 (less the two sensors' noise) above ``travel_min_hz``, and of its
         tyre's equivalent stiffness and damping: the tyre pushes only while in contact, so its
         statistically linearized rate is k_t·P(contact), with the dynamic wheel load
-        −(m_s a_s + m_us a_us) Gaussian of the std its spectrum gives and the static load
-        (m_s + m_us)·g: P(contact) = Φ(W/σ_F). The others get their model's tables."""
+        −(m_s a_s + m_us a_us) Gaussian of the std its spectrum gives and the tyre's static load W
+        (the model's ``static_load``: the car's weight shared by its centre of gravity, loads
+        included; (m_s + m_us)·g where not given): P(contact) = Φ(W/σ_F). The others get their
+        model's tables."""
         corners = np.asarray(corners)
         out = corners.copy()
         share = np.zeros(corners.shape)
@@ -991,7 +993,9 @@ class TyreMonitor:
         mu = np.array([qc.unsprung_mass for qc in at])[:, None]
         load = ms**2 * spec[..., 0].real + mu**2 * spec[..., 1].real + 2.0 * ms * mu * spec[..., 2].real
         var_f = np.maximum(load - (ms**2 + mu**2) * self.noise, 0.0) @ self._band_df
-        contact = ndtr((ms[:, 0] + mu[:, 0]) * _GRAVITY / np.sqrt(np.maximum(var_f, 1e-12)))
+        weight = np.array([(qc.sprung_mass + qc.unsprung_mass) * _GRAVITY if qc.static_load is None
+                           else qc.static_load for qc in at])  # the tyre's static load, N  # fmt: skip
+        contact = ndtr(weight / np.sqrt(np.maximum(var_f, 1e-12)))
         lift = np.rint(-np.log(np.maximum(contact, 0.05)) / log_step).astype(int)
         sd = np.sqrt(var_x)
         mean, k_eq = np.zeros(corners.size), rate.copy()

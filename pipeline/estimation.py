@@ -274,6 +274,7 @@ def linear_corner_model(
     static_travel: float = 0.0,
     vehicle: VehicleParams | None = None,
     full_car: FullCar | None = None,
+    static_load: float | None = None,
 ) -> LinearQuarterCar:
     """The SUV corner as a linear roll-plane corner model for the joint estimator.
 
@@ -287,8 +288,9 @@ def linear_corner_model(
     quarter car on a campaign's MuJoCo runs. `tire_file`: the tyre of the run (``.tir``, its radial
     damping), default the SUV's. The corner's non-linear spring and damper laws come with it
     (``suspension``) and `static_travel` (m, :func:`corner_static_travel`), for estimators that
-    linearize them at the measured travel (the online monitor). `vehicle`: default the SUV's
-    parameter file (:func:`run_vehicle` gives a run's, its scenario overrides applied)."""
+    linearize them at the measured travel (the online monitor), and `static_load` (N, the tyre's
+    static force, :func:`corner_static_load`; None: the corner's masses times g). `vehicle`: default
+    the SUV's parameter file (:func:`run_vehicle` gives a run's, its scenario overrides applied)."""
     vehicle = vehicle or load_vehicle()
     s = vehicle.suspension
     i = CORNERS.index(corner)
@@ -311,6 +313,7 @@ def linear_corner_model(
         full_car=full_car,
         corner=i,
         envelope_half_length=float(vehicle.tire.envelope_half_length),
+        static_load=None if static_load is None else float(static_load),
     )
 
 

@@ -77,7 +77,7 @@ def corner_models(
 ):  # fmt: skip
     """The SUV's linear corner models of `corners` with extra `loads` on the chassis ((kg, (x, y, z) m)
     each, :func:`suvtwin.pipeline.estimation.run_loads`): their total mass shared as in paper 000
-    eq. 2, and each corner's static travel under them; each placed in the car as a linear full car
+    eq. 2, each corner's static travel and tyre load under them; each placed in the car as a linear full car
     (:func:`suvtwin.pipeline.estimation.full_car_model`, loads included). `vehicle`: default the
     SUV's parameter file (:func:`suvtwin.pipeline.estimation.run_vehicle` gives a run's).
     `corner_model`: one of :data:`CORNER_MODELS` (``roll_plane``: not placed in the full car)."""
@@ -88,7 +88,7 @@ def corner_models(
     return [
         linear_corner_model(c, corner_sprung_mass(c, load_kg, vehicle=vehicle), tire_file=tire_file,
                             static_travel=corner_static_travel(c, loads, vehicle=vehicle), vehicle=vehicle,
-                            full_car=car)
+                            full_car=car, static_load=corner_static_load(c, loads, vehicle=vehicle))
         for c in corners
     ]  # fmt: skip
 

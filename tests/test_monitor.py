@@ -399,3 +399,30 @@ def test_the_compiled_prediction_and_bayes_steps_equal_their_definitions():
     np.testing.assert_array_equal(m._state.post[0], before[0])
     mon._bayes(m._state.post, np.array([0]), np.full((1,) + before.shape[2:], np.nan))
     np.testing.assert_array_equal(m._state.post[0], before[0])
+
+
+def test_corner_models_carry_each_tyres_static_load_in_force_and_moment_balance():
+    # the tyre-contact share compares the dynamic wheel load with the tyre's static load: with a load
+    # behind the rear axle the four static loads must carry the whole weight and balance its moments
+    # about the centre of gravity (pitch and roll), which the corner masses of paper 000 eq. 2 do not
+    from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
+    from suvtwin.pipeline.monitoring import corner_models
+
+    vehicle = load_vehicle()
+    mass, x, y = 250.0, -1.9, 0.3  # kg, m from the chassis centre of gravity (x forward, y left)
+    models = corner_models(CORNERS, loads=[(mass, (x, y, 0.1))])
+    empty = corner_models(CORNERS)
+    extra = np.array([m.static_load for m in models]) - np.array([m.static_load for m in empty])
+    g = 9.81
+    np.testing.assert_allclose(extra.sum(), mass * g, rtol=1e-9)
+    ch = vehicle.chassis
+    lever_x = np.array([ch.a1, ch.a1, -ch.a2, -ch.a2])  # axle positions from the centre of gravity
+    lever_y = 0.5 * np.array([ch.track_front, -ch.track_front, ch.track_rear, -ch.track_rear])
+    np.testing.assert_allclose(extra @ lever_x, mass * g * x, rtol=1e-9)
+    np.testing.assert_allclose(extra @ lever_y, mass * g * y, rtol=1e-9)
+    own = np.array([m.static_load for m in empty])
+    np.testing.assert_allclose(own, [(m.sprung_mass + m.unsprung_mass) * g for m in empty], rtol=1e-9)
+    # the corner masses share the load by paper 000 eq. 2, not by where it sits: the rears' weight
+    # from them falls short of their static load
+    rear_masses = sum((m.sprung_mass + m.unsprung_mass) * g for m in models[2:])
+    assert rear_masses < sum(m.static_load for m in models[2:]) - 0.2 * mass * g

@@ -105,7 +105,10 @@ def test_windows_near_the_rough_limit_count_less(rough_loaded_run):
     _, untapered = monitor_signals(t, v, acc_s, acc_u, loads=loads, preview=False, config=full)
     sig_t, sig_u = tapered.pressure_sigma_pa[-1] / 1e3, untapered.pressure_sigma_pa[-1] / 1e3
     assert np.all(sig_t >= sig_u - 1e-9)
-    assert np.all(sig_t[2:] > 1.05 * sig_u[2:])
+    # rear left 1.24x, rear right 1.03x (1.06x while the contact share took the corner's masses for
+    # its static load, which overstated the loaded rears' time off the ground)
+    assert np.all(sig_t[2:] > 1.02 * sig_u[2:])
+    assert np.max(sig_t[2:] / sig_u[2:]) > 1.15
     for out in (tapered, monitor_signals(t, v, acc_s, acc_u, loads=loads, preview=False)[1]):  # + default
         err = out.pressure_pa[-1] / 1e3 - truth
         assert np.all(np.abs(err) <= 3.0 * out.pressure_sigma_pa[-1] / 1e3)
