@@ -46,6 +46,12 @@ monitor's projected likelihood it changed nothing measurable (100 MuJoCo ``const
 observable tyres at 30 s: −0.5 ± 9.2 kPa against −0.1 ± 9.1 with the even part), so the monitor
 keeps the even part; ``bench/two_channel_mujoco.py`` uses the whole.
 
+The spring's residual (the progression, the stops) has its spectrum the same way
+(:func:`spring_hermite`, :func:`spring_residual_psd`). It is a diagnostic, not used by the monitor:
+on the MuJoCo SUV's class D runs the bump stop cuts the travel's upper tail, the travel is not
+Gaussian there, and the formula came out several times the actual residual of the loaded rears at
+5–10 Hz (``bench/spring_residual.py`` measures it from the simulator's travel).
+
 Written by hand: no maintained library linearizes a piecewise polynomial spring this way.
 
 References
@@ -80,7 +86,9 @@ __all__ = [
     "partial_moment",
     "rectified_psd",
     "spring_force",
+    "spring_hermite",
     "spring_rate",
+    "spring_residual_psd",
     "static_travel",
 ]
 
@@ -371,6 +379,28 @@ def damper_even_slope(law: SuspensionLaw, sigma_velocity: npt.ArrayLike) -> np.n
     return alpha - beta * cov / (1.0 - 2.0 / math.pi)
 
 
+_HERMITE_X = np.linspace(-8.0, 8.0, 4001)
+"""Nodes of the Hermite coefficients' trapezoid rule, in σ (the laws have kinks: at 0 and the knee for
+the damper, at the stops for the spring, where Gauss–Hermite nodes converge slowly)."""
+_HERMITE_W = np.exp(-0.5 * _HERMITE_X**2)
+_HERMITE_W[[0, -1]] *= 0.5
+_HERMITE_W /= _HERMITE_W.sum()
+
+
+def _hermite(values: np.ndarray, n_max: int) -> tuple[np.ndarray, np.ndarray]:
+    """Hermite coefficients (..., n_max + 1) and mean square (...) of a function's `values` (..., X) at
+    the nodes :data:`_HERMITE_X` of a standard normal variable (trapezoid rule); :math:`h_n` by its
+    three-term recurrence, stable for every order used here."""
+    x = _HERMITE_X
+    weighted = values * _HERMITE_W
+    coef = np.empty(values.shape[:-1] + (n_max + 1,))
+    h_prev, h = np.zeros_like(x), np.ones_like(x)
+    for n in range(n_max + 1):
+        coef[..., n] = weighted @ h
+        h_prev, h = h, (x * h - math.sqrt(n) * h_prev) / math.sqrt(n + 1)
+    return coef, (weighted * values).sum(axis=-1)
+
+
 def damper_hermite(
     law: SuspensionLaw, sigma_velocity: npt.ArrayLike, n_max: int = 40
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -381,21 +411,24 @@ def damper_hermite(
     and `power` (...), :math:`E[F_d^2]` (N²). :math:`b_0` is the mean force (the jacking),
     :math:`b_1/\sigma_v` the statistically linearized damping :math:`E[F_d'(v)]` (N s/m; Stein's
     lemma), and :math:`E[F_d^2] - \sum_n b_n^2` what orders above `n_max` hold (a knee's
-    coefficients fall off slowly). Trapezoid rule over ±8σ on 4001 points (the law has kinks at 0
-    and at the knee, where Gauss–Hermite nodes converge slowly); :math:`h_n` by its three-term
-    recurrence, stable for every order used here."""
+    coefficients fall off slowly). Trapezoid rule over ±8σ on 4001 points."""
     sv = np.maximum(np.asarray(sigma_velocity, dtype=float), _SIGMA_FLOOR)
-    x = np.linspace(-8.0, 8.0, 4001)
-    w = np.exp(-0.5 * x**2)
-    w[[0, -1]] *= 0.5
-    w = w / w.sum()
-    force = damper_force(sv[..., None] * x, law) * w  # (..., X), weighted
-    coef = np.empty(sv.shape + (n_max + 1,))
-    h_prev, h = np.zeros_like(x), np.ones_like(x)
-    for n in range(n_max + 1):
-        coef[..., n] = force @ h
-        h_prev, h = h, (x * h - math.sqrt(n) * h_prev) / math.sqrt(n + 1)
-    return coef, (force * damper_force(sv[..., None] * x, law)).sum(axis=-1)
+    return _hermite(damper_force(sv[..., None] * _HERMITE_X, law), n_max)
+
+
+def spring_hermite(
+    law: SuspensionLaw, mean: npt.ArrayLike, sigma: npt.ArrayLike, n_max: int = 40
+) -> tuple[np.ndarray, np.ndarray]:
+    r"""Hermite coefficients of the spring's force (stops included) at a Gaussian travel
+    s = m + σx, x ~ N(0, 1): :math:`a_n = E[(F_s(m + \sigma x) - F_s(0))\,h_n(x)]` (N), (..., n_max + 1),
+    and `power` :math:`E[(F_s - F_s(0))^2]` (N²), as :func:`damper_hermite`. :math:`a_0` is
+    :func:`gaussian_spring_force`, :math:`a_1/\sigma` :func:`gaussian_spring_rate` (Stein's lemma);
+    the orders from 2 on are what the linearization leaves (the progression's cubic term, the
+    stops)."""
+    m = np.asarray(mean, dtype=float)
+    sd = np.maximum(np.asarray(sigma, dtype=float), _SIGMA_FLOOR)
+    m, sd = np.broadcast_arrays(m, sd)
+    return _hermite(spring_force(m[..., None] + sd[..., None] * _HERMITE_X, law), n_max)
 
 
 def _cosines(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -466,14 +499,46 @@ def damper_residual_psd(
     :func:`rectified_psd` (same `max_lag_s` limits)."""
     tau, d_tau, var, rho = _lag_correlation(f_in, psd, df, f_out, max_lag_s)
     coef, power = damper_hermite(law, np.sqrt(var[..., 0]), n_max)
+    return _lag_window_psd(_mehler_residual(coef, power, rho), tau, d_tau, max_lag_s, f_out)
+
+
+def spring_residual_psd(
+    law: SuspensionLaw,
+    mean: npt.ArrayLike,
+    f_in: npt.ArrayLike,
+    psd: npt.ArrayLike,
+    df: npt.ArrayLike,
+    f_out: npt.ArrayLike,
+    *,
+    max_lag_s: float = 4.0,
+    n_max: int = 40,
+) -> np.ndarray:
+    r"""One-sided PSD (N²/Hz) at `f_out` of what the spring's statistical linearization leaves,
+    :math:`r = F_s(m + x) - E[F_s] - k_{eq} x`, for a Gaussian travel of mean `mean` m (m, (...))
+    and zero-mean part x of one-sided PSD `psd` ((..., F_in), m²/Hz) on `f_in` (Hz), bin widths `df`.
+
+    As :func:`damper_residual_psd` with the spring's Hermite coefficients (:func:`spring_hermite`):
+    :math:`C(\tau) = \sum_{n \ge 2} a_n^2 \rho_x(\tau)^n`. Where the travel reaches a stop, its
+    force comes in short pulses: power spread far above the travel's own frequencies, which a linear
+    model of the corner reads as road (the stop's mean rate is in :math:`k_{eq}`, its pulses are
+    not). Its cross-spectrum with the damper's residual is left out."""
+    tau, d_tau, var, rho = _lag_correlation(f_in, psd, df, f_out, max_lag_s)
+    coef, power = spring_hermite(law, mean, np.sqrt(var[..., 0]), n_max)
+    return _lag_window_psd(_mehler_residual(coef, power, rho), tau, d_tau, max_lag_s, f_out)
+
+
+def _mehler_residual(coef: np.ndarray, power: np.ndarray, rho: np.ndarray) -> np.ndarray:
+    r"""Autocovariance (..., lags) of :math:`f(X_t) - b_0 - b_1 X_t/\sigma` for a Gaussian process of
+    correlation `rho` (..., lags) and f's Hermite coefficients `coef` (..., N + 1) and mean square
+    `power`: Mehler's :math:`\sum_{n=2}^{N} b_n^2 \rho^n`, the orders above N as
+    :math:`\rho^{N+1}` times their power."""
     cov = np.zeros_like(rho)
     rho_n = rho.copy()
-    for n in range(2, n_max + 1):
+    for n in range(2, coef.shape[-1]):
         rho_n = rho_n * rho
         cov += coef[..., n, None] ** 2 * rho_n
     rest = np.maximum(power - (coef**2).sum(axis=-1), 0.0)
-    cov += rest[..., None] * rho_n * rho
-    return _lag_window_psd(cov, tau, d_tau, max_lag_s, f_out)
+    return cov + rest[..., None] * rho_n * rho
 
 
 def rectified_psd(

@@ -24,7 +24,9 @@ from suvtwin.suspension_law import (
     gaussian_spring_rate,
     rectified_psd,
     spring_force,
+    spring_hermite,
     spring_rate,
+    spring_residual_psd,
     static_travel,
 )
 
@@ -253,3 +255,51 @@ def test_damper_residual_psd_against_a_simulated_gaussian_process():
                            compression_high=2000.0, rebound_high=2000.0)  # fmt: skip
     zero = damper_residual_psd(linear, fw[1:], pv[1:], np.full(fw.size - 1, fw[1]), fw[at])
     assert np.abs(zero).max() < 1e-9 * measured.max()
+
+
+@pytest.mark.parametrize("mean, sigma", [(0.0, 0.01), (0.035, 0.018), (-0.05, 0.02)])
+def test_spring_hermite_coefficients_against_the_closed_forms(mean, sigma):
+    # a0 = E[F_s], a1/σ = E[F_s'] (Stein) against the partial-moment closed forms; the orders sum to
+    # E[F_s²] (Monte Carlo)
+    law = LAWS[2]
+    coef, power = spring_hermite(law, mean, sigma)
+    assert coef[0] == pytest.approx(float(gaussian_spring_force(law, mean, sigma)), rel=1e-6, abs=1e-6)
+    assert coef[1] / sigma == pytest.approx(float(gaussian_spring_rate(law, mean, sigma)), rel=1e-5)
+    s = np.random.default_rng(5).normal(mean, sigma, 2_000_000)
+    assert power == pytest.approx(float(np.mean(spring_force(s, law) ** 2)), rel=0.01)
+    assert np.sum(coef**2) <= power * (1 + 1e-9)
+    linear = SuspensionLaw(spring_rate=4e4)
+    coef, power = spring_hermite(linear, mean, sigma)
+    assert coef[1] == pytest.approx(4e4 * sigma, rel=1e-6)
+    assert np.abs(coef[2:]).max() < 1e-6 * coef[1]
+
+
+def test_spring_residual_psd_against_a_simulated_gaussian_process():
+    # a loaded corner's travel on a rough road: 35 mm mean, 18 mm std, the bump stop at 60 mm
+    # (touched 8 % of the time). The residual F_s(m + x) − E[F_s] − k_eq x, its Welch PSD against
+    # the formula from x's; above the travel's own band the stop's pulses dominate
+    fs = 400.0
+    x = _body_and_hop_process(np.random.default_rng(6), fs, 2**20, hop_hz=11.0, hop_width_hz=2.5)
+    x *= 0.018 / x.std()
+    from scipy.signal import welch
+
+    law, mean = LAWS[2], 0.035
+    coef, _ = spring_hermite(law, mean, x.std())
+    residual = spring_force(mean + x, law) - coef[0] - coef[1] * x / x.std()
+    fw, px = welch(x, fs=fs, nperseg=8192)
+    _, pr = welch(residual, fs=fs, nperseg=8192)
+    at = np.searchsorted(fw, [2.0, 5.0, 11.0, 22.0, 35.0])
+    bins = np.full(fw.size - 1, fw[1])
+    predicted = spring_residual_psd(law, mean, fw[1:], px[1:], bins, fw[at], max_lag_s=4.0)
+    measured = np.array([pr[k - 20 : k + 20].mean() for k in at])
+    np.testing.assert_allclose(predicted, measured, rtol=0.1)
+    # the residual's power against the linearized force's at 22 Hz: the stop's pulses reach where the
+    # travel has little power of its own
+    _, pl = welch(coef[1] * x / x.std(), fs=fs, nperseg=8192)
+    assert predicted[3] > 0.05 * pl[at[3] - 20 : at[3] + 20].mean()
+    # without stops and progression the residual vanishes; far from the stops only the progression's
+    linear = SuspensionLaw(spring_rate=4e4)
+    none = spring_residual_psd(linear, mean, fw[1:], px[1:], bins, fw[at])
+    assert np.abs(none).max() < 1e-9 * measured.max()
+    small = spring_residual_psd(law, 0.0, fw[1:], px[1:] * 0.1, bins, fw[at])
+    assert small.max() < 1e-3 * measured.max()
