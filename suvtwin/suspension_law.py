@@ -519,9 +519,11 @@ def spring_residual_psd(
 
     As :func:`damper_residual_psd` with the spring's Hermite coefficients (:func:`spring_hermite`):
     :math:`C(\tau) = \sum_{n \ge 2} a_n^2 \rho_x(\tau)^n`. Where the travel reaches a stop, its
-    force comes in short pulses: power spread far above the travel's own frequencies, which a linear
-    model of the corner reads as road (the stop's mean rate is in :math:`k_{eq}`, its pulses are
-    not). Its cross-spectrum with the damper's residual is left out."""
+    force comes in short pulses: power spread far above the travel's own frequencies (the stop's mean
+    rate is in :math:`k_{eq}`, its pulses are not). Added to a linear model's response as a separate
+    force, r needs its cross-spectrum with the road-driven part too: r is uncorrelated with the travel
+    at every lag, so where an output follows the travel r's net contribution is negative. Its
+    cross-spectrum with the damper's residual is left out."""
     tau, d_tau, var, rho = _lag_correlation(f_in, psd, df, f_out, max_lag_s)
     coef, power = spring_hermite(law, mean, np.sqrt(var[..., 0]), n_max)
     return _lag_window_psd(_mehler_residual(coef, power, rho), tau, d_tau, max_lag_s, f_out)
