@@ -409,7 +409,7 @@ class MonitorConfig:
             ("max_frequency_hz", self.max_frequency_hz > 0, "> 0"),
             ("merge_above_hz", self.merge_above_hz >= 0, "≥ 0"),
             ("merge_width_hz", 0 < self.merge_width_hz <= 5.0, "(0, 5] Hz"),
-            ("sigma_accel", self.sigma_accel > 0, "> 0"),
+            ("sigma_accel", 0 < self.sigma_accel <= 100.0, "(0, 100] m/s²"),
             (
                 "pressure_range_kpa",
                 0 < self.pressure_range_kpa[0] < self.pressure_range_kpa[1],
@@ -750,6 +750,8 @@ class TyreMonitor:
     wheelbase_m : float, optional
         Distance from the front to the rear axle, m.
     preview_config : PreviewConfig, optional
+        Settings of each track's preview (default: the preview's defaults with this monitor's
+        ``sigma_accel``: one noise figure for the accelerometers).
     """
 
     def __init__(
@@ -879,7 +881,7 @@ class TyreMonitor:
             )
         self._previews = [
             PreviewTrack(self.models[f], self.models[r], self.tires[f], self.tires[r], dt, float(wheelbase_m),
-                         preview_config)
+                         preview_config or PreviewConfig(sigma_accel=cfg.sigma_accel))
             for f, r in self.tracks
         ]  # fmt: skip
         self._laws = np.array([[t.kt0, t.p0, t.pfz1] for t in self.tires]).T  # (3, C): eq. 3–4 per corner

@@ -545,6 +545,12 @@ def monitor_command(
                             "identical tyres, as the simulator's): the fused pressures before learned "
                             "references calibrate the radii, and with --placard the warning.")
     ] = 1.0,
+    accel_noise: Annotated[
+        float | None,
+        typer.Option(help="The accelerometers' white-noise σ per sample, m/s² (0.05–50). Default: the "
+                     "noise the run file records for its sensors (a simulated run's scenario), never below "
+                     "0.5; 0.5 where it records none.")
+    ] = None,
 ) -> None:
     """Monitor all tyres' pressures online (causal, streaming) and warn of deflation (UN R141 / FMVSS 138)."""
     _check_out(out, "--out", (".parquet",))
@@ -560,7 +566,7 @@ def monitor_command(
         raise InputError(f"--radius-spread must be 0–20 ‰, got {radius_spread}")
     rule = DeflationRule(radius_spread_permille=radius_spread)
     result = monitor_run(run, corners=names, placard_kpa=placard, reset_at_s=reset_at, preview=preview,
-                         radius=radius, rule=rule)  # fmt: skip
+                         radius=radius, rule=rule, accel_noise_mps2=accel_noise)  # fmt: skip
     write_monitor(result, out)
     last = result.table.iloc[-1] if len(result.table) else None
     typer.echo(f"wrote {out} ({len(result.table)} updates of {', '.join(names)})")

@@ -40,6 +40,7 @@ __all__ = [
     "estimate_run",
     "full_car_model",
     "linear_corner_model",
+    "run_accel_noise",
     "run_load_and_tire",
     "score_estimate",
     "write_estimate",
@@ -197,6 +198,15 @@ def run_load_and_tire(meta: dict, path: str | Path) -> tuple[float, str | None]:
     if tire_file is not None and not Path(tire_file).is_file():
         raise InputError(f"run {path} was simulated with the tyre file {tire_file}, which is not there now")
     return float(sum(item.get("mass_kg", 0.0) for item in scenario.get("load", []))), tire_file
+
+
+def run_accel_noise(meta: dict) -> float | None:
+    """The accelerometers' white-noise σ a run was simulated with (m/s² per sample, the larger of
+    the sprung and unsprung channels'), from its metadata; None where the run records none (or
+    none above zero)."""
+    noise = (meta.get("scenario") or {}).get("noise") or {}
+    sigma = max(float(noise.get("accel_sprung_mps2", 0.0)), float(noise.get("accel_unsprung_mps2", 0.0)))
+    return sigma if sigma > 0.0 else None
 
 
 def run_vehicle(meta: dict) -> VehicleParams:

@@ -14,7 +14,7 @@ metadata, if any) and the run's tyre.
 from __future__ import annotations
 
 import json
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -36,6 +36,7 @@ from suvtwin.pipeline.estimation import (
     corner_static_travel,
     full_car_model,
     linear_corner_model,
+    run_accel_noise,
     run_load_and_tire,
     run_loads,
     run_vehicle,
@@ -237,6 +238,7 @@ def monitor_run(
     preview: bool = True,
     corner_model: str = "full_car",
     radius: bool = True,
+    accel_noise_mps2: float | None = None,
 ) -> MonitorResult:
     """Run the monitor and the deflation warning on a run file.
 
@@ -258,7 +260,12 @@ def monitor_run(
     ``{c}_fused_sigma_kpa``: the pressure with the radii, against the tyre model within the tyres'
     spread, or once learned references are known against the radii when they were learned; the
     warning decides on it; and with a learned reference ``{c}_relative_loss_probability``: the
-    tyre against the others since the radii's calibration after the reset).
+    tyre against the others since the radii's calibration after the reset). `accel_noise_mps2`: the
+    accelerometers' white-noise σ per sample (m/s², 0.05–50) the monitor and its previews assume;
+    None: the noise the run records for its sensors (:func:`~suvtwin.pipeline.estimation.run_accel_noise`,
+    the simulator's scenario), never below `config`'s ``sigma_accel`` (the figure the monitor was
+    validated with, 0.5 m/s² by default: below it the bands where the road's signal is weak would
+    count at a precision the linear corner model does not have); `config`'s where the run records none.
     """
     unknown = [c for c in corners if c not in CORNERS]
     if unknown or not corners:
@@ -279,8 +286,19 @@ def monitor_run(
     check_signals(frame["speed_mps"].to_numpy(dtype=float), {}, path, refuse_accel=False, speed_gaps=True)
     if reset_at_s is not None and not (np.isfinite(reset_at_s) and t[0] <= reset_at_s <= t[-1]):
         raise InputError(f"--reset-at must lie within the run, {t[0]:g}–{t[-1]:g} s, got {reset_at_s}")
+    noise = accel_noise_mps2
+    if noise is not None and not (np.isfinite(noise) and 0.05 <= noise <= 50.0):
+        raise InputError(f"--accel-noise must be an accelerometer noise σ within 0.05–50 m/s², got {noise}")
     raw = (table.schema.metadata or {}).get(b"suvtwin.run")
     meta = json.loads(raw) if raw else {}
+    config = config or MonitorConfig()
+    recorded = run_accel_noise(meta)
+    if accel_noise_mps2 is not None:
+        config, noise_source = replace(config, sigma_accel=float(accel_noise_mps2)), "given"
+    elif recorded is not None and recorded >= config.sigma_accel:
+        config, noise_source = replace(config, sigma_accel=recorded), "the run's sensors"
+    else:
+        noise_source = "the monitor's floor (above the run's)" if recorded else "the monitor's default"
     load, tire_file = run_load_and_tire(meta, path)
     loads = run_loads(meta)
     acc_s = frame[[f"{c}_accel_sprung_mps2" for c in corners]].to_numpy(dtype=float)
@@ -340,6 +358,8 @@ def monitor_run(
         "placard_kpa": placard_kpa,
         "reset_at_s": None if placard_kpa is not None else float(t[0] if reset_at_s is None else reset_at_s),
         "config": asdict(monitor.config),
+        "accel_noise": {"sigma_mps2": monitor.config.sigma_accel, "source": noise_source,
+                        "recorded_mps2": recorded},
         "rule": asdict(rule),
         "segments": counts["segments"],
         "segment_status": {r: dict(zip(corners, counts[r].tolist(), strict=True)) for r in SKIP_REASONS},

@@ -393,6 +393,7 @@ def estimate_run_road(
     """
     from suvtwin.mjcf.tire import load_tire
     from suvtwin.mjcf.vehicle import load_vehicle
+    from suvtwin.pipeline.estimation import run_accel_noise
     from suvtwin.pipeline.simulator import read_run
     from suvtwin.roads.iso8608 import class_level
 
@@ -402,10 +403,8 @@ def estimate_run_road(
         raise InputError(f"skip_s must be a finite number >= 0 s, got {skip_s!r}")
     gd = class_level(road_class)
     table, meta = read_run(run_path)
-    noise = (meta.get("scenario") or {}).get("noise") or {}
     if measurement_std is None:
-        measurement_std = max(float(noise.get("accel_sprung_mps2", 0.0)),
-                              float(noise.get("accel_unsprung_mps2", 0.0))) or 0.5
+        measurement_std = run_accel_noise(meta) or 0.5
     t = np.asarray(table["t_s"], dtype=float)
     keep = t >= t[0] + skip_s - 1e-9
     if keep.sum() < 16:

@@ -84,6 +84,7 @@ def test_online_estimate_tolerates_a_gap(run_file, tmp_path, capsys):
         (["--placard", "230", "--reset-at", "0"], "not both"),
         (["--reset-at", "99"], "--reset-at must lie within the run"),
         (["--corners", "fl,xx"], "--corners must list distinct tyres"),
+        (["--accel-noise", "0"], "--accel-noise must be an accelerometer noise σ within 0.05–50 m/s²"),
     ],
 )
 def test_bad_input_exits_2_and_writes_nothing(run_file, tmp_path, capsys, argv_extra, message):
@@ -167,3 +168,48 @@ def test_after_a_reset_the_radii_warn_a_leaking_tyre_before_any_reference_is_lea
     assert warned["rr"]["reference_kpa"] is None
     frame = table.to_pandas()
     assert frame["rr_relative_loss_probability"].iloc[:6].max() < 0.01  # nothing before the leak
+
+
+def test_monitor_assumes_the_noise_the_run_records_for_its_sensors(run_file, tmp_path):
+    # The run re-noised at 3 m/s² per sample, its metadata saying so (as the simulator records its
+    # sensors): the monitor and both previews assume 3 m/s²; --accel-noise overrides; the original
+    # run (0.5 m/s² recorded) keeps the monitor's 0.5.
+    import pyarrow as pa
+
+    from suvtwin.estimators.monitor import MonitorConfig, TyreMonitor
+    from suvtwin.pipeline.monitoring import corner_models, monitor_run
+
+    table = pq.read_table(run_file)
+    meta = json.loads(table.schema.metadata[b"suvtwin.run"])
+    assert meta["scenario"]["noise"] == {"accel_sprung_mps2": 0.5, "accel_unsprung_mps2": 0.5}
+    frame = table.to_pandas()
+    rng = np.random.default_rng(11)
+    for c in ("fl", "fr", "rl", "rr"):
+        for w in ("sprung", "unsprung"):
+            noise = 3.0 * rng.standard_normal(len(frame))
+            frame[f"{c}_accel_{w}_mps2"] = frame[f"{c}_accel_{w}_true_mps2"] + noise
+    meta["scenario"]["noise"] = {"accel_sprung_mps2": 3.0, "accel_unsprung_mps2": 3.0}
+    noisy = tmp_path / "noisy.parquet"
+    pq.write_table(pa.Table.from_pandas(frame, preserve_index=False)
+                   .replace_schema_metadata({b"suvtwin.run": json.dumps(meta).encode()}), noisy)  # fmt: skip
+    # the body channel above 100 Hz is the noise alone (the body's own motion there is ~1e-4 of it):
+    # its one-sided PSD is 2 σ² dt
+    from scipy.signal import welch
+
+    f, psd = welch(frame["fl_accel_sprung_mps2"].to_numpy(), fs=1000.0, nperseg=1000)
+    assert np.median(psd[(f > 100) & (f < 450)]) == pytest.approx(2 * 3.0**2 * 1e-3, rel=0.1)
+
+    result = monitor_run(noisy, placard_kpa=250.0)
+    noise = result.metadata["accel_noise"]
+    assert noise == {"sigma_mps2": 3.0, "source": "the run's sensors", "recorded_mps2": 3.0}
+    last = result.table.iloc[-1]
+    for c in ("fl", "fr", "rl", "rr"):
+        assert abs(last[f"{c}_pressure_hat_kpa"] - 180.0) < 3.0 * last[f"{c}_pressure_sigma_kpa"]
+    given = monitor_run(noisy, placard_kpa=250.0, accel_noise_mps2=0.5)
+    assert given.metadata["accel_noise"] == {"sigma_mps2": 0.5, "source": "given", "recorded_mps2": 3.0}
+    plain = monitor_run(run_file, placard_kpa=250.0)
+    assert plain.metadata["accel_noise"]["sigma_mps2"] == 0.5
+    # one noise figure for all the accelerometers: the previews take the monitor's
+    monitor = TyreMonitor(corner_models(("fl", "fr", "rl", "rr")), dt=1e-3,
+                          config=MonitorConfig(sigma_accel=3.0), tracks=((0, 2), (1, 3)), wheelbase_m=2.8)
+    assert [track.config.sigma_accel for track in monitor._previews] == [3.0, 3.0]
