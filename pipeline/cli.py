@@ -551,6 +551,12 @@ def monitor_command(
                      "noise the run file records for its sensors (a simulated run's scenario), never below "
                      "0.5; 0.5 where it records none.")
     ] = None,
+    road_waviness: Annotated[
+        str,
+        typer.Option(help="Prior on the road's waviness w (its PSD's exponent): iso (w = 2, ISO 8608's "
+                     "classes, with probability 0.8) or free (uniform on 1.5–3: honest on other roads, "
+                     "wider on ISO ones).")
+    ] = "iso",
 ) -> None:
     """Monitor all tyres' pressures online (causal, streaming) and warn of deflation (UN R141 / FMVSS 138)."""
     _check_out(out, "--out", (".parquet",))
@@ -566,7 +572,8 @@ def monitor_command(
         raise InputError(f"--radius-spread must be 0–20 ‰, got {radius_spread}")
     rule = DeflationRule(radius_spread_permille=radius_spread)
     result = monitor_run(run, corners=names, placard_kpa=placard, reset_at_s=reset_at, preview=preview,
-                         radius=radius, rule=rule, accel_noise_mps2=accel_noise)  # fmt: skip
+                         radius=radius, rule=rule, accel_noise_mps2=accel_noise,
+                         road_waviness=road_waviness)  # fmt: skip
     write_monitor(result, out)
     last = result.table.iloc[-1] if len(result.table) else None
     typer.echo(f"wrote {out} ({len(result.table)} updates of {', '.join(names)})")

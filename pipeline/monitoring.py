@@ -44,8 +44,8 @@ from suvtwin.pipeline.estimation import (
 from suvtwin.tire_stiffness import tire_stiffness_of
 
 __all__ = [
-    "CORNER_MODELS", "MonitorResult", "RADIUS_COLUMNS", "corner_models", "monitor_run", "monitor_signals",
-    "radius_evidence", "tyre_load_share", "wheel_positions", "write_monitor",
+    "CORNER_MODELS", "MonitorResult", "RADIUS_COLUMNS", "ROAD_WAVINESS", "corner_models", "monitor_run",
+    "monitor_signals", "radius_evidence", "tyre_load_share", "wheel_positions", "write_monitor",
 ]  # fmt: skip
 
 RADIUS_COLUMNS = ("yaw_rate_radps", "lat_accel_mps2", "long_accel_mps2")
@@ -226,6 +226,15 @@ def radius_evidence(
     return RadiusEvidence(excess=excess, sigma=sigma, gain_per_kpa=gain, model=model, lag_kpa=lag), analysis
 
 
+ROAD_WAVINESS = {"iso": {}, "free": {"waviness_iso_weight": 0.0, "waviness_points": 7}}
+"""The monitor's prior on the road's waviness w (the exponent of its PSD), by name: ``iso`` (the
+:class:`~suvtwin.estimators.monitor.MonitorConfig` default: w = 2, ISO 8608's classes, with
+probability 0.8, else uniform on 1.5–3 at 5 points) or ``free`` (uniform on 1.5–3 at 7 points, no
+weight at 2). Within 10–30 s of data a corner's spectrum barely tells w from k_t, so the prior
+decides: ``iso`` is sharper on ISO roads and biased, its σ too small, where w differs (bench
+``monitor_waviness.py``)."""
+
+
 def monitor_run(
     path: str | Path,
     *,
@@ -239,6 +248,7 @@ def monitor_run(
     corner_model: str = "full_car",
     radius: bool = True,
     accel_noise_mps2: float | None = None,
+    road_waviness: str = "iso",
 ) -> MonitorResult:
     """Run the monitor and the deflation warning on a run file.
 
@@ -266,6 +276,7 @@ def monitor_run(
     the simulator's scenario), never below `config`'s ``sigma_accel`` (the figure the monitor was
     validated with, 0.5 m/s² by default: below it the bands where the road's signal is weak would
     count at a precision the linear corner model does not have); `config`'s where the run records none.
+    `road_waviness`: the prior on the road's waviness, :data:`ROAD_WAVINESS` (applied over `config`).
     """
     unknown = [c for c in corners if c not in CORNERS]
     if unknown or not corners:
@@ -289,9 +300,11 @@ def monitor_run(
     noise = accel_noise_mps2
     if noise is not None and not (np.isfinite(noise) and 0.05 <= noise <= 50.0):
         raise InputError(f"--accel-noise must be an accelerometer noise σ within 0.05–50 m/s², got {noise}")
+    if road_waviness not in ROAD_WAVINESS:
+        raise InputError(f"--road-waviness must be one of {', '.join(ROAD_WAVINESS)}, got {road_waviness!r}")
     raw = (table.schema.metadata or {}).get(b"suvtwin.run")
     meta = json.loads(raw) if raw else {}
-    config = config or MonitorConfig()
+    config = replace(config or MonitorConfig(), **ROAD_WAVINESS[road_waviness])
     recorded = run_accel_noise(meta)
     if accel_noise_mps2 is not None:
         config, noise_source = replace(config, sigma_accel=float(accel_noise_mps2)), "given"
@@ -358,6 +371,7 @@ def monitor_run(
         "placard_kpa": placard_kpa,
         "reset_at_s": None if placard_kpa is not None else float(t[0] if reset_at_s is None else reset_at_s),
         "config": asdict(monitor.config),
+        "road_waviness": road_waviness,
         "accel_noise": {"sigma_mps2": monitor.config.sigma_accel, "source": noise_source,
                         "recorded_mps2": recorded},
         "rule": asdict(rule),

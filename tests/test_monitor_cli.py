@@ -85,6 +85,7 @@ def test_online_estimate_tolerates_a_gap(run_file, tmp_path, capsys):
         (["--reset-at", "99"], "--reset-at must lie within the run"),
         (["--corners", "fl,xx"], "--corners must list distinct tyres"),
         (["--accel-noise", "0"], "--accel-noise must be an accelerometer noise σ within 0.05–50 m/s²"),
+        (["--road-waviness", "smooth"], "--road-waviness must be one of iso, free"),
     ],
 )
 def test_bad_input_exits_2_and_writes_nothing(run_file, tmp_path, capsys, argv_extra, message):
@@ -213,3 +214,11 @@ def test_monitor_assumes_the_noise_the_run_records_for_its_sensors(run_file, tmp
     monitor = TyreMonitor(corner_models(("fl", "fr", "rl", "rr")), dt=1e-3,
                           config=MonitorConfig(sigma_accel=3.0), tracks=((0, 2), (1, 3)), wheelbase_m=2.8)
     assert [track.config.sigma_accel for track in monitor._previews] == [3.0, 3.0]
+
+
+def test_monitor_takes_the_free_waviness_prior_by_name(run_file, tmp_path):
+    out = tmp_path / "free.parquet"
+    assert main(["monitor", str(run_file), "--out", str(out), "--road-waviness", "free"]) == 0
+    meta = json.loads(pq.read_table(out).schema.metadata[b"suvtwin.monitor"])
+    assert meta["road_waviness"] == "free"
+    assert meta["config"]["waviness_iso_weight"] == 0.0 and meta["config"]["waviness_points"] == 7
