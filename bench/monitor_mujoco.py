@@ -1,7 +1,8 @@
 """The four-corner tyre-pressure monitor (issue 12) on MuJoCo ground truth, one scenario set at a time.
 
 Run: ``python bench/monitor_mujoco.py --set constant --runs 100 [--jobs 2] [--corner-model roll_plane]
-[--no-preview]`` — prints JSON (``--corner-model``: the monitor's corner model, default the full car;
+[--no-preview] [--road-waviness free]`` — prints JSON (``--corner-model``: the monitor's corner model,
+default the full car; ``--road-waviness``: its prior on the road's waviness, default ``iso``;
 ``--no-preview``: each tyre on its own, without the front→rear preview that ``suvtwin monitor``
 uses by default).
 Sets (:mod:`suvtwin.pipeline.monitor_scenarios`): ``constant``, ``slow_leak``, ``drop``,
@@ -129,6 +130,8 @@ def main(argv: list[str] | None = None) -> dict:
     )
     add("--corner-model", default="full_car", choices=("full_car", "roll_plane"),
         help="how the monitor models each corner (default full_car; roll_plane: the model before)")
+    add("--road-waviness", default="iso", choices=("iso", "free"),
+        help="the monitor's prior on the road's waviness (suvtwin.pipeline.monitoring.ROAD_WAVINESS)")
     add("--no-preview", dest="preview", action="store_false",
         help="each tyre on its own (default: each track's two tyres fused through its front→rear preview)")
     add("--discard-runs", action="store_true", help="delete run files once monitored")
@@ -173,7 +176,8 @@ def main(argv: list[str] | None = None) -> dict:
             }
         if monitor_ok and not args.simulate_only and part:
             print(f"{label}: monitoring", file=sys.stderr)
-            monitor = partial(monitor_run, corner_model=args.corner_model, preview=args.preview)
+            monitor = partial(monitor_run, corner_model=args.corner_model, preview=args.preview,
+                              road_waviness=args.road_waviness)  # fmt: skip
             t, e, cost = monitor_traces(part, paths, monitor=monitor, jobs=args.jobs,
                                         reset_at_s=args.reset_at)  # fmt: skip
             ok = [i for i, trace in enumerate(t) if trace is not None]  # the monitor raised on the others
