@@ -89,6 +89,7 @@ __all__ = [
     "corner_spectrum",
     "gain_at_delay",
     "projected_terms",
+    "static_forces",
     "suspension_force_responses",
     "track_responses",
     "wheel_responses",
@@ -176,6 +177,30 @@ def _body_matrices(
     damp = sel.T @ np.diag(damping) @ sel
     mass = np.diag([car.sprung_mass, car.inertia_pitch, car.inertia_roll, *car.unsprung_mass])
     return jac, stiff, damp, mass
+
+
+def static_forces(car: FullCar, gravity: float = 9.81) -> tuple[np.ndarray, np.ndarray]:
+    r"""The car at rest on level ground: each tyre's vertical force and each corner spring's, N
+    (fl, fr, rl, rr; the springs' from their unstressed length, the anti-roll bars carrying the rest).
+
+    Four supports make the weight statically indeterminate: heave, pitch and roll balance fix three
+    combinations of the four tyre forces, and the fourth, the warp (fl + rr against fr + rl), is set
+    by the stiffnesses. A weight off the car's centre line makes a roll moment that the axles share
+    in the ratio of their roll stiffnesses (springs and anti-roll bar in series with the tyres), not
+    of their shares of the weight (W. F. Milliken and D. L. Milliken, *Race Car Vehicle Dynamics*,
+    SAE, 1995, ch. 18). Here the linear model of the module docstring is solved for
+    :math:`(K + K_t)\,q = -g\,(m, 0, 0, m_{u,fl}, \dots, m_{u,rr})` (the body's weight at its centre
+    of gravity, each wheel's own); tyre i carries :math:`-k_{t,i} z_{u,i}` and its spring
+    :math:`k_i s_i`. `gravity`: m/s²."""
+    jac, stiff, _, _ = _body_matrices(car, np.asarray(car.spring_rate, dtype=float),
+                                      np.asarray(car.damping, dtype=float))  # fmt: skip
+    kt = np.asarray(car.tire_stiffness, dtype=float)
+    stiff = stiff.copy()
+    stiff[3:, 3:] += np.diag(kt)
+    weight = gravity * np.r_[car.sprung_mass, 0.0, 0.0, np.asarray(car.unsprung_mass, dtype=float)]
+    q = np.linalg.solve(stiff, -weight)
+    compression = q[3:] - jac @ q[:3]
+    return -kt * q[3:], np.asarray(car.spring_rate, dtype=float) * compression
 
 
 def _dynamic_stiffness(car: FullCar, s: np.ndarray, stiff, damp, mass, speed_mps: float | None) -> np.ndarray:

@@ -72,7 +72,10 @@ class CornerSignals:
     scenario's vehicle overrides the runs were made with (their corner model's spring, damper,
     anti-roll bar), None for the SUV's parameter file; `loads`: the runs' extra loads on the
     chassis, (kg, (x, y, z) m from its CoG) each, for estimators that model the whole car (the
-    online monitor's full car).
+    online monitor's full car); `static_load_n`: the corner tyre's static force under them, N
+    (:func:`suvtwin.pipeline.estimation.corner_static_load`), None: the corner's masses times g;
+    `accel_noise_mps2`: the accelerometers' white-noise σ per sample the runs record, m/s²
+    (:func:`suvtwin.pipeline.estimation.run_accel_noise`), None where unknown.
     """
 
     acc_sprung: np.ndarray
@@ -90,6 +93,8 @@ class CornerSignals:
     static_travel_m: float = 0.0
     vehicle: dict | None = None
     loads: tuple = ()
+    static_load_n: float | None = None
+    accel_noise_mps2: float | None = None
 
 
 @dataclass(frozen=True)
@@ -218,11 +223,14 @@ def _run_joint(signals: CornerSignals) -> BatchEstimate:
 
 def _run_online(signals: CornerSignals) -> BatchEstimate:
     """The online monitor (:mod:`suvtwin.estimators.monitor`) on the corner alone, one stream per run,
-    its estimate held from each update to the next (before the first: the prior)."""
+    its estimate held from each update to the next (before the first: the prior). It assumes the
+    sensor noise and the tyre's static load the signals carry, as ``suvtwin monitor`` does
+    (:func:`suvtwin.pipeline.monitoring.assumed_accel_noise`)."""
     import numpy as np
 
-    from suvtwin.estimators.monitor import TyreMonitor, pressure_at
+    from suvtwin.estimators.monitor import MonitorConfig, TyreMonitor, pressure_at
     from suvtwin.pipeline.estimation import full_car_model, linear_corner_model
+    from suvtwin.pipeline.monitoring import assumed_accel_noise
     from suvtwin.tire_stiffness import (
         stiffness_at_pressure_array,
         stiffness_sigma_at_pressure_sigma,
@@ -233,7 +241,8 @@ def _run_online(signals: CornerSignals) -> BatchEstimate:
     car = full_car_model(vehicle, signals.loads, tire_file=signals.tire_file)  # the corner in its car
     qc = linear_corner_model(signals.corner, signals.sprung_mass, tire_file=signals.tire_file,
                              static_travel=signals.static_travel_m, vehicle=vehicle,
-                             full_car=car)  # fmt: skip
+                             full_car=car, static_load=signals.static_load_n)  # fmt: skip
+    config, noise_source = assumed_accel_noise(MonitorConfig(), signals.accel_noise_mps2)
     tire = tire_stiffness_of(signals.tire_file)
     n_runs, n_steps = signals.acc_sprung.shape
     t = np.arange(n_steps) * signals.dt
@@ -245,7 +254,7 @@ def _run_online(signals: CornerSignals) -> BatchEstimate:
     for b in range(n_runs):
         speed = (signals.speed_series_mps[b] if signals.speed_series_mps is not None
                  else np.full(n_steps, signals.speed_mps[b]))  # fmt: skip
-        monitor = TyreMonitor([qc], dt=signals.dt, tire=tire, names=[signals.corner])
+        monitor = TyreMonitor([qc], dt=signals.dt, tire=tire, names=[signals.corner], config=config)
         out = monitor.update(t, speed, signals.acc_sprung[b][:, None], signals.acc_unsprung[b][:, None])
         prior_pa = monitor.config.prior_pressure_kpa or tire.p0 / 1e3
         pb, sb = pressure_at(out, t, np.array([prior_pa * 1e3]), monitor.config.prior_sigma_kpa * 1e3)
@@ -265,7 +274,8 @@ def _run_online(signals: CornerSignals) -> BatchEstimate:
         info={
             "road_input": "estimated level",
             "causal": True,
-            "config": asdict(monitor.config),
+            "config": asdict(config),
+            "accel_noise_source": noise_source,
             "windows_used": used,
         },
     )

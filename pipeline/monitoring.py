@@ -32,14 +32,14 @@ from suvtwin.pipeline.estimation import (
     check_signals,
     check_time_axis,
     corner_sprung_mass,
-    corner_static_load,
-    corner_static_travel,
     full_car_model,
     linear_corner_model,
     run_accel_noise,
     run_load_and_tire,
     run_loads,
     run_vehicle,
+    static_travels,
+    static_wheel_loads,
 )
 from suvtwin.tire_stiffness import tire_stiffness_of
 
@@ -86,12 +86,28 @@ def corner_models(
         raise InputError(f"corner model must be one of {', '.join(CORNER_MODELS)}, got {corner_model!r}")
     load_kg = float(sum(m for m, _ in loads))
     car = full_car_model(vehicle, loads, tire_file=tire_file) if corner_model == "full_car" else None
+    travel, wheel_loads = static_travels(loads, vehicle=vehicle), static_wheel_loads(loads, vehicle=vehicle)
     return [
         linear_corner_model(c, corner_sprung_mass(c, load_kg, vehicle=vehicle), tire_file=tire_file,
-                            static_travel=corner_static_travel(c, loads, vehicle=vehicle), vehicle=vehicle,
-                            full_car=car, static_load=corner_static_load(c, loads, vehicle=vehicle))
+                            static_travel=float(travel[CORNERS.index(c)]), vehicle=vehicle, full_car=car,
+                            static_load=float(wheel_loads[CORNERS.index(c)]))
         for c in corners
     ]  # fmt: skip
+
+
+def assumed_accel_noise(
+    config: MonitorConfig, recorded: float | None, given: float | None = None
+) -> tuple[MonitorConfig, str]:
+    """`config` with the accelerometer noise σ (m/s² per sample) the monitor assumes, and where it
+    comes from: `given` if not None; else the noise the run `recorded` for its sensors
+    (:func:`~suvtwin.pipeline.estimation.run_accel_noise`), never below `config`'s ``sigma_accel``
+    (the figure the monitor was validated with: below it the likelihood would count at a precision
+    the linear corner model does not have); `config`'s where nothing is recorded."""
+    if given is not None:
+        return replace(config, sigma_accel=float(given)), "given"
+    if recorded is not None and recorded >= config.sigma_accel:
+        return replace(config, sigma_accel=float(recorded)), "the run's sensors"
+    return config, ("the monitor's floor (above the run's)" if recorded else "the monitor's default")
 
 
 def stream_dt(t_s: np.ndarray) -> float:
@@ -158,11 +174,11 @@ def tyre_load_share(acc_sprung: np.ndarray, acc_unsprung: np.ndarray, *, loads=(
     unsprung accelerations (n, 4) m/s² (:func:`~suvtwin.estimators.rolling_radius.load_share`): the
     corners' sprung masses with the extra `loads` (paper 000 eq. 2), the vehicle's unsprung masses,
     the static loads with the loads where they sit
-    (:func:`~suvtwin.pipeline.estimation.corner_static_load`)."""
+    (:func:`~suvtwin.pipeline.estimation.static_wheel_loads`)."""
     load_kg = float(sum(m for m, _ in loads))
     return load_share(
         acc_sprung, acc_unsprung, [corner_sprung_mass(c, load_kg, vehicle=vehicle) for c in CORNERS],
-        vehicle.unsprung_mass, [corner_static_load(c, loads, vehicle=vehicle) for c in CORNERS],
+        vehicle.unsprung_mass, static_wheel_loads(loads, vehicle=vehicle),
     )  # fmt: skip
 
 
@@ -211,7 +227,7 @@ def radius_evidence(
     held = held + (held.sum(axis=1, keepdims=True) - held) / (n_c - 1)
     sigma = np.hypot(np.where(at[:, None] >= 0, rows.sigma[np.maximum(at, 0)], np.nan), held)
     tp = tire.to_array()
-    wheel_loads = [corner_static_load(c, loads, vehicle=vehicle) for c in CORNERS]
+    wheel_loads = static_wheel_loads(loads, vehicle=vehicle)
     ref_pa = (placard_kpa * 1e3) if placard_kpa is not None else tire.nominal_pressure
     low_pa = (1.0 - rule.detect_fraction) * ref_pa
     log_re = np.log([[effective_rolling_radius(fz, q, tp) for q in (ref_pa, low_pa)] for fz in wheel_loads])
@@ -306,12 +322,7 @@ def monitor_run(
     meta = json.loads(raw) if raw else {}
     config = replace(config or MonitorConfig(), **ROAD_WAVINESS[road_waviness])
     recorded = run_accel_noise(meta)
-    if accel_noise_mps2 is not None:
-        config, noise_source = replace(config, sigma_accel=float(accel_noise_mps2)), "given"
-    elif recorded is not None and recorded >= config.sigma_accel:
-        config, noise_source = replace(config, sigma_accel=recorded), "the run's sensors"
-    else:
-        noise_source = "the monitor's floor (above the run's)" if recorded else "the monitor's default"
+    config, noise_source = assumed_accel_noise(config, recorded, accel_noise_mps2)
     load, tire_file = run_load_and_tire(meta, path)
     loads = run_loads(meta)
     acc_s = frame[[f"{c}_accel_sprung_mps2" for c in corners]].to_numpy(dtype=float)

@@ -206,6 +206,14 @@ def test_monitor_assumes_the_noise_the_run_records_for_its_sensors(run_file, tmp
     last = result.table.iloc[-1]
     for c in ("fl", "fr", "rl", "rr"):
         assert abs(last[f"{c}_pressure_hat_kpa"] - 180.0) < 3.0 * last[f"{c}_pressure_sigma_kpa"]
+    # suvtwin estimate --estimator online (one corner) assumes the same figure
+    from suvtwin.pipeline.estimation import estimate_run
+
+    one = estimate_run(noisy, corner="fl", estimator="online", params="identified", road_input=None, seed=0)
+    assert one.metadata["config"]["sigma_accel"] == 3.0
+    assert one.metadata["accel_noise_source"] == "the run's sensors"
+    end = one.table.iloc[-1]
+    assert abs(end["pressure_hat_kpa"] - 180.0) < 3.0 * end["pressure_sigma_kpa"]
     given = monitor_run(noisy, placard_kpa=250.0, accel_noise_mps2=0.5)
     assert given.metadata["accel_noise"] == {"sigma_mps2": 0.5, "source": "given", "recorded_mps2": 3.0}
     plain = monitor_run(run_file, placard_kpa=250.0)
