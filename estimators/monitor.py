@@ -269,7 +269,12 @@ class MonitorConfig:
     pressure_range_kpa : (float, float)
         Range the pressures are kept in, kPa.
     prior_pressure_kpa, prior_sigma_kpa : float or None, float
-        Gaussian prior on each pressure, kPa (None: the tyre's nominal pressure).
+        Gaussian prior on each pressure, kPa (None: the tyre's nominal pressure), cut to
+        ``pressure_range_kpa``. The default σ, 1000 kPa, makes it flat over the range (its density
+        varies there by under 6 %): the monitor does not presume a tyre inflated. A prior about the
+        nominal pressure pulls every early estimate of a low tyre up, against the warnings the
+        monitor is for: N(nominal, 100 kPa), the default until 2026-12-03, read the 100
+        ``constant`` bench runs (130–230 kPa) +3.0 kPa high at 10 s, the flat one +0.2 (README).
     waviness_range : (float, float)
         Range of the road waviness w.
     waviness_iso_weight : float
@@ -363,7 +368,7 @@ class MonitorConfig:
     sigma_accel: float = 0.5
     pressure_range_kpa: tuple[float, float] = (60.0, 400.0)
     prior_pressure_kpa: float | None = None
-    prior_sigma_kpa: float = 100.0
+    prior_sigma_kpa: float = 1000.0
     waviness_range: tuple[float, float] = (1.5, 3.0)
     waviness_iso_weight: float = 0.8
     waviness_points: int = 5
@@ -821,7 +826,7 @@ class TyreMonitor:
         slab_weight = math.log1p(-iso) - math.log(slab.size) if slab.size else 0.0
         spike = [math.log(iso)] if iso > 0 else []
         self._w_logprior = np.concatenate([spike, np.full(slab.size, slab_weight)])
-        # the prior on p on the fine grid: Gaussian, cut to the range
+        # the prior on p on the fine grid: Gaussian (by default flat), cut to the range
         self._prior = np.array(
             [t.p0 / 1e3 if cfg.prior_pressure_kpa is None else cfg.prior_pressure_kpa for t in self.tires]
         )
@@ -1050,6 +1055,19 @@ class TyreMonitor:
         s = self._state
         arrays = [s.post, s.buffer_t, s.buffer_v, s.buffer_s, s.buffer_u, s.blocks]
         return int(sum(a.nbytes for a in arrays)) + sum(t.state_nbytes for t in self._previews)
+
+    @property
+    def prior_pa(self) -> np.ndarray:
+        """Each corner's prior mean pressure on the monitor's grid (the Gaussian cut to its range), Pa."""
+        w = np.exp(self._log_prior)
+        return 1e3 * (w @ self._p_grid)
+
+    @property
+    def prior_sigma_pa(self) -> np.ndarray:
+        """Each corner's prior σ of the pressure on the monitor's grid, Pa (C,)."""
+        w = np.exp(self._log_prior)
+        mean = w @ self._p_grid
+        return 1e3 * np.sqrt(np.maximum(w @ self._p_grid**2 - mean**2, 0.0))
 
     @property
     def counts(self) -> dict:

@@ -256,8 +256,7 @@ def _run_online(signals: CornerSignals) -> BatchEstimate:
                  else np.full(n_steps, signals.speed_mps[b]))  # fmt: skip
         monitor = TyreMonitor([qc], dt=signals.dt, tire=tire, names=[signals.corner], config=config)
         out = monitor.update(t, speed, signals.acc_sprung[b][:, None], signals.acc_unsprung[b][:, None])
-        prior_pa = monitor.config.prior_pressure_kpa or tire.p0 / 1e3
-        pb, sb = pressure_at(out, t, np.array([prior_pa * 1e3]), monitor.config.prior_sigma_kpa * 1e3)
+        pb, sb = pressure_at(out, t, monitor.prior_pa, monitor.prior_sigma_pa)
         p[b], sig[b] = pb[:, 0], sb[:, 0]
         idx = np.searchsorted(out.t_s, t, side="right") - 1
         seen = idx >= 0

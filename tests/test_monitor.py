@@ -98,7 +98,7 @@ def test_faults_are_skipped_and_counted_never_fatal(runs):
     assert counts["despiked"][2] == 1 and counts["spike"][2] == 0 and counts["used"][2] == counts["segments"]
     assert counts["gap"][3] == counts["segments"]
     assert np.all(np.isfinite(out.pressure_pa)) and np.all(np.isfinite(out.pressure_sigma_pa))
-    # a corner with no usable data says so: not observable, the prior's σ (100 kPa cut to the range)
+    # a corner with no usable data says so: not observable, the prior's σ (flat over the range)
     assert not np.any(out.observable[:, 1]) and not np.any(out.observable[:, 3])
     np.testing.assert_allclose(out.pressure_sigma_pa[-1, 3], _prior_sigma_pa(), rtol=0.02)
     # the gap costs the corner with it a few windows, not its estimate
@@ -108,12 +108,28 @@ def test_faults_are_skipped_and_counted_never_fatal(runs):
 
 
 def _prior_sigma_pa() -> float:
-    """σ of the monitor's default prior: N(the tyre's nominal pressure, 100²) kPa cut to its
-    60–400 kPa range (scipy's truncated normal)."""
+    """σ of the monitor's default prior: N(the tyre's nominal pressure, 1000²) kPa cut to its
+    60–400 kPa range (scipy's truncated normal): within 0.2 % of the uniform's (400 − 60)/√12."""
     cfg, p0 = MonitorConfig(), suv_tire_stiffness().p0 / 1e3
     lo, hi = cfg.pressure_range_kpa
     a, b = (lo - p0) / cfg.prior_sigma_kpa, (hi - p0) / cfg.prior_sigma_kpa
     return 1e3 * truncnorm.std(a, b, loc=p0, scale=cfg.prior_sigma_kpa)
+
+
+def test_the_default_pressure_prior_is_flat_over_the_range():
+    # The monitor does not presume a tyre inflated: before any data each pressure is uniform on the
+    # 60–400 kPa range, mean at its centre and σ (400 − 60)/√12 (on the grid, within 0.5 %); a prior
+    # about the nominal pressure (σ 100 kPa) leans toward 250 kPa.
+    lo, hi = MonitorConfig().pressure_range_kpa
+    flat = TyreMonitor([QC] * 2, dt=DT)
+    np.testing.assert_allclose(flat.prior_pa, 1e3 * 0.5 * (lo + hi), rtol=0.005)
+    np.testing.assert_allclose(flat.prior_sigma_pa, 1e3 * (hi - lo) / math.sqrt(12.0), rtol=0.005)
+    leaning = TyreMonitor([QC], dt=DT, config=MonitorConfig(prior_sigma_kpa=100.0))
+    p0 = suv_tire_stiffness().p0 / 1e3
+    a, b = (lo - p0) / 100.0, (hi - p0) / 100.0
+    cut = truncnorm(a, b, loc=p0, scale=100.0)
+    assert leaning.prior_pa[0] == pytest.approx(1e3 * cut.mean(), rel=0.005)
+    assert leaning.prior_sigma_pa[0] == pytest.approx(1e3 * cut.std(), rel=0.005)
 
 
 def test_low_speed_is_flagged_not_observable(runs):
