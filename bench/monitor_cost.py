@@ -64,6 +64,7 @@ def main() -> None:
     from suvtwin.estimators.rolling_radius import RollingRadius
     from suvtwin.mjcf.tire import load_tire
     from suvtwin.mjcf.vehicle import load_vehicle
+    from suvtwin.pipeline.estimation import static_wheel_loads
     from suvtwin.pipeline.monitoring import corner_models, tyre_load_share, wheel_positions
 
     frame = pq.read_table(path).to_pandas()
@@ -77,6 +78,7 @@ def main() -> None:
     n = t0.size
     tracks = ((0, 2), (1, 3)) if preview else ()  # both tracks' preview (the default), or none
     vehicle = load_vehicle()
+    static = static_wheel_loads(vehicle=vehicle)  # the tyres' static loads, N
 
     def fresh():
         """A monitor and radius analysis that have seen nothing."""
@@ -94,8 +96,9 @@ def main() -> None:
         mon.update(t, v[i : i + m], acc_s[i : i + m], acc_u[i : i + m])
         mid = time.perf_counter()
         if radius:
-            # each sample's tyre loads from the accelerometers, as the pipeline feeds them (no load here)
-            share = tyre_load_share(acc_s[i : i + m], acc_u[i : i + m], vehicle=vehicle)
+            # each sample's tyre loads from the accelerometers, as the pipeline feeds them (no load here;
+            # the static loads worked out once, as an online system would)
+            share = tyre_load_share(acc_s[i : i + m], acc_u[i : i + m], vehicle=vehicle, static_loads=static)
             ana.update(t, wheel[i : i + m], yaw[i : i + m], lat[i : i + m], lon[i : i + m], load_share=share)
         end = time.perf_counter()
         return end - tick, end - mid

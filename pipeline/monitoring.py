@@ -169,16 +169,19 @@ def wheel_positions(vehicle) -> np.ndarray:
     return np.array([[vehicle.wheelbase, front], [vehicle.wheelbase, -front], [0.0, rear], [0.0, -rear]])
 
 
-def tyre_load_share(acc_sprung: np.ndarray, acc_unsprung: np.ndarray, *, loads=(), vehicle) -> np.ndarray:
+def tyre_load_share(
+    acc_sprung: np.ndarray, acc_unsprung: np.ndarray, *, loads=(), vehicle, static_loads=None
+) -> np.ndarray:
     """Each sample's tyre load over its static load at the four corners (n, 4), from their sprung and
     unsprung accelerations (n, 4) m/s² (:func:`~suvtwin.estimators.rolling_radius.load_share`): the
     corners' sprung masses with the extra `loads` (paper 000 eq. 2), the vehicle's unsprung masses,
-    the static loads with the loads where they sit
-    (:func:`~suvtwin.pipeline.estimation.static_wheel_loads`)."""
+    the static loads with the loads where they sit (`static_loads`, N, (4,): given by a caller that
+    feeds chunks; default :func:`~suvtwin.pipeline.estimation.static_wheel_loads`, ~1 ms)."""
     load_kg = float(sum(m for m, _ in loads))
+    static = static_wheel_loads(loads, vehicle=vehicle) if static_loads is None else static_loads
     return load_share(
         acc_sprung, acc_unsprung, [corner_sprung_mass(c, load_kg, vehicle=vehicle) for c in CORNERS],
-        vehicle.unsprung_mass, static_wheel_loads(loads, vehicle=vehicle),
+        vehicle.unsprung_mass, static,
     )  # fmt: skip
 
 
