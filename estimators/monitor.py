@@ -1648,10 +1648,11 @@ def _spiky(sub: np.ndarray, top: np.ndarray, bottom: np.ndarray, z: float):
     return np.maximum(top - med, med - bottom) > z * np.maximum(mad, 1e-12), med, mad
 
 
-def pressure_at(update: MonitorUpdate, t_s: np.ndarray, prior_pa: np.ndarray, prior_sigma_pa: float):
+def pressure_at(update: MonitorUpdate, t_s: np.ndarray, prior_pa: np.ndarray, prior_sigma_pa: npt.ArrayLike):
     """The monitor's estimate on another time axis (step-hold: each row holds until the next).
 
-    Before the first row: `prior_pa` (C,) ± `prior_sigma_pa`. Returns pressure and σ, (T, C), Pa.
+    Before the first row: `prior_pa` (C,) ± `prior_sigma_pa` (one σ or one per corner, (C,);
+    :attr:`TyreMonitor.prior_pa`, :attr:`TyreMonitor.prior_sigma_pa`). Returns pressure and σ, (T, C), Pa.
     """
     idx = np.searchsorted(update.t_s, np.asarray(t_s, dtype=float), side="right") - 1
     n_c = update.pressure_pa.shape[1] if update.pressure_pa.ndim == 2 else len(prior_pa)
