@@ -70,14 +70,17 @@ def _load_run(path: str | Path, corner: str, *, gaps: bool = False) -> tuple[pd.
     frame = table.select(
         needed + [c for c in (f"{corner}_pressure_kpa",) if c in table.column_names]
     ).to_pandas()
-    checked = needed[:2] if gaps else needed
+    # the speed's own check below (a streaming estimator takes its gaps and reversing)
+    checked = needed[:1] if gaps else [needed[0], *needed[2:]]
     values = frame[checked].to_numpy(dtype=float)
     if not np.all(np.isfinite(values)):
         bad = [c for c in checked if not np.all(np.isfinite(frame[c].to_numpy(dtype=float)))]
         raise InputError(f"run file {str(path)!r}: column(s) {', '.join(bad)} hold NaN or infinite values")
     dt = check_time_axis(frame["t_s"].to_numpy(dtype=float), path)
     accelerations = {c: frame[c].to_numpy(dtype=float) for c in needed[2:]}
-    check_signals(frame["speed_mps"].to_numpy(dtype=float), accelerations, path, refuse_accel=not gaps)
+    frame["speed_mps"] = check_signals(
+        frame["speed_mps"].to_numpy(dtype=float), accelerations, path, refuse_accel=not gaps, speed_gaps=gaps
+    )
     raw = (table.schema.metadata or {}).get(b"suvtwin.run")
     meta = json.loads(raw) if raw else {}
     return frame, meta, dt
@@ -87,6 +90,13 @@ MIN_SAMPLE_INTERVAL_S, MAX_SAMPLE_INTERVAL_S = 1e-5, 0.05
 """Sample intervals a measurement file may have, s (100 kHz to 20 Hz): time in ms or µs falls outside."""
 MAX_SPEED_MPS = 100.0
 """Highest plausible vehicle speed in a measurement file, m/s (360 km/h)."""
+STANDSTILL_MPS = 0.5
+"""A standing or creeping car, m/s (1.8 km/h): its speed signal scatters about zero (the simulator's
+body velocity at rest is ~1e-5 m/s either way) and it may roll back a little as it stops (the
+simulator's SUV by ~5 cm/s); values down to −this are not reversing."""
+MAX_IMPLAUSIBLE_SPEED_SHARE = 0.01
+"""Share of a streamed run's speed samples that may lie beyond :data:`MAX_SPEED_MPS` (spikes of a
+faulty signal: skipped as gaps); more is a wrong unit or a broken signal, and the file is refused."""
 MAX_ACCEL_MPS2 = 1000.0
 """Largest plausible accelerometer value, m/s² (~100 g): beyond it a sample is a fault. The batch
 estimators refuse such a file; the online monitor skips the windows with one (``implausible``)."""
@@ -122,16 +132,41 @@ def check_signals(
     *,
     refuse_accel: bool,
     speed_gaps: bool = False,
-) -> None:
-    """Refuse a negative or implausible speed (> :data:`MAX_SPEED_MPS`; a NaN too unless
-    `speed_gaps`) and, with `refuse_accel`, accelerations beyond ±:data:`MAX_ACCEL_MPS2` (NaN
-    allowed: a gap)."""
-    v = np.asarray(speed, dtype=float)
-    bad = (v < 0.0) | (v > MAX_SPEED_MPS) | np.isinf(v) | (np.isnan(v) & (not speed_gaps))
-    if np.any(bad):
-        raise InputError(
-            f"run file {str(path)!r}: speed_mps must be within 0–{MAX_SPEED_MPS:g} m/s, got {v[bad][0]:g}"
-        )
+) -> np.ndarray:
+    """The run's speed as the estimators take it (m/s), or one message refusing the file.
+
+    Batch (`speed_gaps` False): refuses a missing, infinite or implausible speed (beyond
+    :data:`MAX_SPEED_MPS`) and reversing (below −:data:`STANDSTILL_MPS`: the estimators model forward
+    driving); a standing or creeping car's speed about zero is kept. Streamed (`speed_gaps` True,
+    the online monitor): a NaN is a gap, a negative speed (reversing, standstill) is kept (the
+    monitor skips and counts those windows as ``speed``) unless it is most of the run (the wrong
+    sign: refused), and samples beyond :data:`MAX_SPEED_MPS` or infinite become gaps (NaN) when they
+    are at most :data:`MAX_IMPLAUSIBLE_SPEED_SHARE` of the run (spikes), else the file is refused (a
+    wrong unit). With `refuse_accel`, accelerations beyond ±:data:`MAX_ACCEL_MPS2` refuse the file
+    (NaN allowed: a gap)."""
+    v = np.array(speed, dtype=float)
+    where = f"run file {str(path)!r}: speed_mps"
+    if speed_gaps:
+        wild = np.isinf(v) | (v > MAX_SPEED_MPS)
+        if np.mean(wild) > MAX_IMPLAUSIBLE_SPEED_SHARE:
+            raise InputError(
+                f"{where} must be within 0–{MAX_SPEED_MPS:g} m/s (reversing and gaps allowed); "
+                f"{int(wild.sum())} of {v.size} samples are beyond (e.g. {v[wild][0]:g}): the wrong unit?"
+            )
+        back = v < -STANDSTILL_MPS
+        if np.mean(back) > 0.5:
+            raise InputError(
+                f"{where} must be within 0–{MAX_SPEED_MPS:g} m/s: it is negative on {int(back.sum())} of "
+                f"{v.size} samples (e.g. {v[back][0]:g}): reversing for most of the run, or the wrong sign?"
+            )
+        v[wild] = np.nan
+    else:
+        bad = ~np.isfinite(v) | (v > MAX_SPEED_MPS) | (v < -STANDSTILL_MPS)
+        if np.any(bad):
+            raise InputError(
+                f"{where} must be within 0–{MAX_SPEED_MPS:g} m/s (a standing or creeping car down to "
+                f"−{STANDSTILL_MPS:g} allowed, no reversing, no gaps), got {v[bad][0]:g}"
+            )
     if refuse_accel:
         for name, a in accelerations.items():
             a = np.asarray(a, dtype=float)
@@ -141,6 +176,7 @@ def check_signals(
                     f"run file {str(path)!r}: {name} holds {int(big.sum())} value(s) beyond "
                     f"±{MAX_ACCEL_MPS2:g} m/s² (e.g. {a[big][0]:g}): a faulty sensor or the wrong unit"
                 )
+    return v
 
 
 def estimate_run(
@@ -162,7 +198,7 @@ def estimate_run(
         acc_sprung=frame[f"{corner}_accel_sprung_mps2"].to_numpy()[None, :],
         acc_unsprung=frame[f"{corner}_accel_unsprung_mps2"].to_numpy()[None, :],
         dt=dt,
-        speed_mps=np.array([max(float(frame["speed_mps"].mean()), 1.0)]),
+        speed_mps=np.array([max(float(np.nan_to_num(frame["speed_mps"].mean())), 1.0)]),
         corner=corner,
         sprung_mass=ms,
         unsprung_mass=float(mus),

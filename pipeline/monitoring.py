@@ -312,8 +312,11 @@ def monitor_run(
     frame = table.select(needed + (wheel if use_radius else [])).to_pandas()
     t = frame["t_s"].to_numpy(dtype=float)
     check_time_axis(t, path)
-    # a NaN speed is a gap the monitor skips; an accelerometer beyond range is flagged per window
-    check_signals(frame["speed_mps"].to_numpy(dtype=float), {}, path, refuse_accel=False, speed_gaps=True)
+    # a NaN speed is a gap the monitor skips, as is reversing; an accelerometer beyond range is
+    # flagged per window
+    speed = check_signals(
+        frame["speed_mps"].to_numpy(dtype=float), {}, path, refuse_accel=False, speed_gaps=True
+    )
     if reset_at_s is not None and not (np.isfinite(reset_at_s) and t[0] <= reset_at_s <= t[-1]):
         raise InputError(f"--reset-at must lie within the run, {t[0]:g}–{t[-1]:g} s, got {reset_at_s}")
     noise = accel_noise_mps2
@@ -331,7 +334,7 @@ def monitor_run(
     acc_s = frame[[f"{c}_accel_sprung_mps2" for c in corners]].to_numpy(dtype=float)
     acc_u = frame[[f"{c}_accel_unsprung_mps2" for c in corners]].to_numpy(dtype=float)
     monitor, update = monitor_signals(
-        t, frame["speed_mps"].to_numpy(dtype=float), acc_s, acc_u, corners=corners, loads=loads,
+        t, speed, acc_s, acc_u, corners=corners, loads=loads,
         tire_file=tire_file, config=config, chunk_s=chunk_s, preview=preview, vehicle=run_vehicle(meta),
         corner_model=corner_model,
     )  # fmt: skip

@@ -230,3 +230,68 @@ def test_monitor_takes_the_free_waviness_prior_by_name(run_file, tmp_path):
     meta = json.loads(pq.read_table(out).schema.metadata[b"suvtwin.monitor"])
     assert meta["road_waviness"] == "free"
     assert meta["config"]["waviness_iso_weight"] == 0.0 and meta["config"]["waviness_points"] == 7
+
+
+def test_a_stop_reversing_and_speed_spikes_are_skipped_windows_not_a_refused_run(run_file, tmp_path):
+    # A standing car's speed signal jitters about zero (the simulator's body velocity at rest dips to
+    # −1e-5 m/s), a car may back up, and a faulty signal may spike: the monitor skips those windows and
+    # counts them (issue 12: never fatal); the rest of the run is estimated as without them.
+    frame = pq.read_table(run_file).to_pandas()
+    v = frame["speed_mps"].to_numpy().copy()
+    v[:3000] = np.where(np.arange(3000) % 2, -1e-5, 1e-5)  # 0–3 s: standing, jittering
+    v[3000:5000] = -2.0  # 3–5 s: backing up
+    v[[9000, 9001, 9500]] = 1e4  # three spikes (0.015 % of the samples)
+    frame["speed_mps"] = v
+    odd = tmp_path / "odd.parquet"
+    frame.to_parquet(odd)
+    out, ref = tmp_path / "m.parquet", tmp_path / "ref.parquet"
+    assert main(["monitor", str(odd), "--out", str(out)]) == 0
+    assert main(["monitor", str(run_file), "--out", str(ref)]) == 0
+    got, base = pq.read_table(out), pq.read_table(ref).to_pandas()
+    status = json.loads(got.schema.metadata[b"suvtwin.monitor"])["segment_status"]
+    frame = got.to_pandas()
+    # the windows (8 s, every 4 s) ending at 4, 8 and 12 s hold the stop or the reversing, those ending
+    # at 12 and 16 s the spikes: every window but the last (12–20 s) skipped for its speed
+    assert all(status["speed"][c] == 4 for c in ("fl", "fr", "rl", "rr")), status
+    assert (frame["fl_status"] == "speed").sum() == 4
+    for c in ("fl", "fr", "rl", "rr"):
+        hat, sigma = frame[f"{c}_pressure_hat_kpa"], frame[f"{c}_pressure_sigma_kpa"]
+        assert np.isfinite(hat).all() and np.isfinite(sigma).all()
+        # with one window of data, each tyre holds the truth (180 kPa) within 3σ, and is no better
+        # informed than with the whole run
+        assert abs(hat.iloc[-1] - 180.0) < 3 * sigma.iloc[-1]
+        assert sigma.iloc[-1] >= base[f"{c}_pressure_sigma_kpa"].iloc[-1]
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (lambda v: np.where(np.arange(v.size) % 20 == 0, 1e4, v), "the wrong unit?"),  # 5 % beyond
+        (lambda v: -v, "the wrong sign?"),  # backing up all along
+    ],
+)
+def test_a_speed_in_the_wrong_unit_or_sign_is_refused(run_file, tmp_path, capsys, change, message):
+    frame = pq.read_table(run_file).to_pandas()
+    frame["speed_mps"] = change(frame["speed_mps"].to_numpy())
+    bad, out = tmp_path / "bad.parquet", tmp_path / "m.parquet"
+    frame.to_parquet(bad)
+    assert main(["monitor", str(bad), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "speed_mps" in err and message in err
+    assert not out.exists()
+
+
+def test_the_batch_estimators_take_a_standing_car_s_jitter_but_not_reversing(tmp_path):
+    from suvtwin.errors import InputError
+    from suvtwin.pipeline.estimation import check_signals
+
+    v = np.r_[np.full(100, 1e-5), np.full(100, -1e-5), np.full(800, 20.0)]
+    np.testing.assert_array_equal(check_signals(v, {}, "run.parquet", refuse_accel=True), v)
+    with pytest.raises(InputError, match="no reversing"):
+        check_signals(np.r_[v, -1.0], {}, "run.parquet", refuse_accel=True)
+    with pytest.raises(InputError, match="no gaps"):
+        check_signals(np.r_[v, np.nan], {}, "run.parquet", refuse_accel=True)
+    # streamed: gaps and spikes kept as gaps, reversing kept
+    odd = np.r_[v, np.nan, 1e4, -1.0]
+    streamed = check_signals(odd, {}, "run.parquet", refuse_accel=False, speed_gaps=True)
+    assert np.isnan(streamed[-3:-1]).all() and streamed[-1] == -1.0
