@@ -330,8 +330,10 @@ class RollingRadius:
         """Consume samples in time order (`t_s` (n,) s, continuing the stream; `wheel_speed_radps`
         (n, C) rad/s; the others (n,), rad/s and m/s², NaN where missing); one row per finished block.
         `load_share` (n, C), optional: each wheel's tyre load over its static load per sample
-        (:func:`load_share`); a sample where a wheel's is below ``min_load_share`` (or NaN) does not
-        count."""
+        (:func:`load_share`); a sample where a wheel's is below ``min_load_share`` does not count. A
+        NaN share (that corner's accelerometer missing) is no evidence of a wheel off the ground: the
+        sample counts on its wheel speeds (one dead accelerometer would otherwise stop all four
+        wheels' analysis)."""
         t = np.asarray(t_s, dtype=float).reshape(-1)
         n_c = self.positions.shape[0]
         w = np.asarray(wheel_speed_radps, dtype=float).reshape(t.size, -1) if t.size else np.empty((0, n_c))
@@ -352,8 +354,7 @@ class RollingRadius:
             raise InputError(f"t_s must continue the stream: got {t[0]} s after {s.last_t} s")
         e, ok = self.sample_excess(w, others[0])
         if load_share is not None:  # a wheel off the ground does not roll on its radius
-            with np.errstate(invalid="ignore"):
-                ok &= np.all(load_share >= self.config.min_load_share, axis=1)
+            ok &= ~np.any(load_share < self.config.min_load_share, axis=1)  # NaN < x is False
             e[~ok] = 0.0
         samples = np.column_stack([e, ok, others[2], others[1]])
         rows = []

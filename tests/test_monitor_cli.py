@@ -295,3 +295,46 @@ def test_the_batch_estimators_take_a_standing_car_s_jitter_but_not_reversing(tmp
     odd = np.r_[v, np.nan, 1e4, -1.0]
     streamed = check_signals(odd, {}, "run.parquet", refuse_accel=False, speed_gaps=True)
     assert np.isnan(streamed[-3:-1]).all() and streamed[-1] == -1.0
+
+
+def test_float32_or_jittered_timestamps_are_taken_and_a_missing_sample_is_refused(run_file, tmp_path, capsys):
+    # A logger's time column may be float32 (rounded to 2e-6 s at 20 s) or jitter by a few percent of
+    # a sample: the monitor reads the same data; a sample left out (every later one a whole interval
+    # off) is refused with one message, as it would shift the front→rear delay and the spectra.
+    frame = pq.read_table(run_file).to_pandas()
+    ref = tmp_path / "ref.parquet"
+    assert main(["monitor", str(run_file), "--out", str(ref)]) == 0
+    base = pq.read_table(ref).to_pandas()
+    jitter = np.random.default_rng(5).uniform(-0.05, 0.05, len(frame)) * 1e-3
+    for name, t in (("f32", frame["t_s"].astype(np.float32)), ("jitter", frame["t_s"] + jitter)):
+        odd, out = tmp_path / f"{name}.parquet", tmp_path / f"{name}_m.parquet"
+        frame.assign(t_s=t).to_parquet(odd)
+        assert main(["monitor", str(odd), "--out", str(out)]) == 0, name
+        got = pq.read_table(out).to_pandas()
+        assert len(got) == len(base)
+        for c in ("fl", "fr", "rl", "rr"):
+            # the interval from the stamps (its median step) moves the frequencies by ~1e-5 and may move
+            # a band's edge by a bin: the same estimate to a small part of its σ
+            diff = np.abs(got[f"{c}_pressure_hat_kpa"] - base[f"{c}_pressure_hat_kpa"])
+            assert (diff < 0.25 * base[f"{c}_pressure_sigma_kpa"]).all(), (name, c, diff.max())
+    gap, out = tmp_path / "gap.parquet", tmp_path / "gap_m.parquet"
+    frame.drop(index=5000).to_parquet(gap)
+    assert main(["monitor", str(gap), "--out", str(out)]) == 2
+    assert "t_s must be uniformly sampled" in capsys.readouterr().err and not out.exists()
+
+
+def test_one_dead_accelerometer_leaves_the_four_wheels_radius_analysis(run_file, tmp_path):
+    # The radius analysis leaves out samples where a wheel is (nearly) off the ground, judged from its
+    # accelerometers; a dead one says nothing of that, and used to stop the analysis of all four wheels.
+    frame = pq.read_table(run_file).to_pandas()
+    frame["rl_accel_unsprung_mps2"] = np.nan
+    dead, out = tmp_path / "dead.parquet", tmp_path / "m.parquet"
+    frame.to_parquet(dead)
+    assert main(["monitor", str(dead), "--out", str(out)]) == 0
+    got = pq.read_table(out).to_pandas()
+    assert (got["rl_status"] == "gap").all() and not got["rl_observable"].any()
+    for c in ("fl", "fr", "rl", "rr"):
+        fused, sigma = got[f"{c}_fused_pressure_kpa"], got[f"{c}_fused_sigma_kpa"]
+        assert np.isfinite(fused).all() and (np.abs(fused - 180.0) < 3 * sigma).all()
+    # the dead tyre's pressure comes from the radii against the others: far narrower than its prior
+    assert got["rl_fused_sigma_kpa"].iloc[-1] < 0.5 * got["rl_pressure_sigma_kpa"].iloc[-1]
