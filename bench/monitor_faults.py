@@ -9,7 +9,8 @@ Each MuJoCo run is monitored clean and with one fault at a time, on all four cor
 - ``spikes``: a ±300 m/s² one-sample spike every 5 s in every unsprung accelerometer;
 - ``clipping``: the front-left unsprung accelerometer saturated (clipped at the quantile that
   cuts 29 % of its samples);
-- ``bias``: +2 m/s² offset on every accelerometer (a mounting or calibration error).
+- ``bias``: +2 m/s² offset on every accelerometer (a mounting or calibration error);
+- ``dead``: the rear-left wheel accelerometer silent (NaN) over the whole run.
 
 Printed per case: the error at 30 s (mean, std, over runs × tyres, kPa), the ±2σ coverage after
 2 s, the windows used and skipped by reason, and the difference of the error from the clean case;
@@ -47,6 +48,9 @@ def _faults(acc_s: np.ndarray, acc_u: np.ndarray, t: np.ndarray) -> dict:
     u[:, 0] = np.minimum(u[:, 0], level)
     cases["clipping"] = (acc_s, u)
     cases["bias"] = (acc_s + 2.0, acc_u + 2.0)
+    u = acc_u.copy()
+    u[:, 2] = np.nan
+    cases["dead"] = (acc_s, u)
     return cases
 
 
