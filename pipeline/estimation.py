@@ -25,7 +25,7 @@ from suvtwin.errors import InputError
 from suvtwin.estimators.full_car import FullCar, static_forces
 from suvtwin.estimators.joint import LinearQuarterCar
 from suvtwin.estimators.quarter_car import sprung_mass_share
-from suvtwin.files import atomic_write, read_parquet_table
+from suvtwin.files import atomic_write, read_parquet_schema, read_parquet_table
 from suvtwin.mjcf.tire import load_tire, tire_forces_array
 from suvtwin.mjcf.vehicle import CORNERS, GRAVITY, VehicleParams, load_vehicle
 from suvtwin.pipeline.estimator_registry import CornerSignals, estimate_columns, find_estimator
@@ -62,14 +62,16 @@ def _load_run(path: str | Path, corner: str, *, gaps: bool = False) -> tuple[pd.
     `gaps`: NaN accelerometer samples are allowed (the estimator skips them)."""
     if corner not in CORNERS:
         raise InputError(f"--corner must be one of fl, fr, rl, rr, got {corner!r}")
-    table = read_parquet_table(path, what="run file")
+    schema = read_parquet_schema(path, what="run file")
     needed = ["t_s", "speed_mps", f"{corner}_accel_sprung_mps2", f"{corner}_accel_unsprung_mps2"]
-    missing = [c for c in needed if c not in table.column_names]
+    missing = [c for c in needed if c not in schema.names]
     if missing:
         raise InputError(f"run file {str(path)!r} lacks column(s) {', '.join(missing)}")
-    frame = table.select(
-        needed + [c for c in (f"{corner}_pressure_kpa",) if c in table.column_names]
-    ).to_pandas()
+    # only the columns used (a run file holds ~90)
+    table = read_parquet_table(
+        path, what="run file", columns=needed + [c for c in (f"{corner}_pressure_kpa",) if c in schema.names]
+    )
+    frame = table.to_pandas()
     # the speed's own check below (a streaming estimator takes its gaps and reversing)
     checked = needed[:1] if gaps else [needed[0], *needed[2:]]
     values = frame[checked].to_numpy(dtype=float)
@@ -81,7 +83,7 @@ def _load_run(path: str | Path, corner: str, *, gaps: bool = False) -> tuple[pd.
     frame["speed_mps"] = check_signals(
         frame["speed_mps"].to_numpy(dtype=float), accelerations, path, refuse_accel=not gaps, speed_gaps=gaps
     )
-    raw = (table.schema.metadata or {}).get(b"suvtwin.run")
+    raw = (schema.metadata or {}).get(b"suvtwin.run")
     meta = json.loads(raw) if raw else {}
     return frame, meta, dt
 

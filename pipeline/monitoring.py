@@ -24,8 +24,8 @@ from suvtwin.errors import InputError
 from suvtwin.estimators.deflation import DeflationRule, RadiusEvidence, deflation_warnings
 from suvtwin.estimators.monitor import SKIP_REASONS, TAIL_LEVELS, MonitorConfig, MonitorUpdate, TyreMonitor
 from suvtwin.estimators.radius_fusion import RadiusModel, vibration_lag_kpa
-from suvtwin.estimators.rolling_radius import RadiusConfig, RollingRadius, load_share
-from suvtwin.files import atomic_write, read_parquet_table
+from suvtwin.estimators.rolling_radius import RadiusConfig, RadiusUpdate, RollingRadius, load_share
+from suvtwin.files import atomic_write, iter_parquet_batches, read_parquet_schema, read_parquet_table
 from suvtwin.mjcf.tire import effective_rolling_radius, load_tire
 from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
 from suvtwin.pipeline.estimation import (
@@ -148,19 +148,12 @@ def monitor_signals(
     two tyres through its front→rear preview (when both its corners are monitored; default on,
     False: each corner on its own); `vehicle`:
     the car's parameters (default the SUV's parameter file); `corner_model`: :data:`CORNER_MODELS`."""
-    vehicle = vehicle or load_vehicle()
     t = np.asarray(t_s, dtype=float)
     if t.size < 2:
         raise InputError("a run needs at least two samples")
     dt = stream_dt(t)
-    tracks = [(corners.index(f), corners.index(r)) for f, r in (("fl", "rl"), ("fr", "rr"))
-              if f in corners and r in corners]  # fmt: skip
-    monitor = TyreMonitor(
-        corner_models(corners, loads=loads, tire_file=tire_file, vehicle=vehicle, corner_model=corner_model),
-        dt=dt, config=config,
-        tire=[tire_stiffness_of(tire_file)] * len(corners), names=corners,
-        tracks=tracks if preview else (), wheelbase_m=vehicle.wheelbase,
-    )  # fmt: skip
+    monitor = _new_monitor(dt, corners, loads=loads, tire_file=tire_file, config=config, preview=preview,
+                           vehicle=vehicle or load_vehicle(), corner_model=corner_model)  # fmt: skip
     step = max(int(round(chunk_s / dt)), 1)
     parts = [
         monitor.update(
@@ -169,6 +162,18 @@ def monitor_signals(
         for i in range(0, t.size, step)
     ]
     return monitor, MonitorUpdate.concatenate(parts)
+
+
+def _new_monitor(dt, corners, *, loads, tire_file, config, preview, vehicle, corner_model) -> TyreMonitor:
+    """A monitor that has seen nothing, of `corners` with each track's preview if `preview`."""
+    tracks = [(corners.index(f), corners.index(r)) for f, r in (("fl", "rl"), ("fr", "rr"))
+              if f in corners and r in corners]  # fmt: skip
+    return TyreMonitor(
+        corner_models(corners, loads=loads, tire_file=tire_file, vehicle=vehicle, corner_model=corner_model),
+        dt=dt, config=config,
+        tire=[tire_stiffness_of(tire_file)] * len(corners), names=corners,
+        tracks=tracks if preview else (), wheelbase_m=vehicle.wheelbase,
+    )  # fmt: skip
 
 
 def wheel_positions(vehicle) -> np.ndarray:
@@ -230,6 +235,14 @@ def radius_evidence(
         t, frame[[f"{c}_wheel_speed_radps" for c in CORNERS]].to_numpy(dtype=float),
         *(frame[k].to_numpy(dtype=float) for k in RADIUS_COLUMNS), load_share=share,
     )  # fmt: skip
+    evidence = _evidence_of_rows(rows, dt, update_t_s, loads=loads, vehicle=vehicle, tire=tire,
+                                 placard_kpa=placard_kpa, rule=rule)  # fmt: skip
+    return evidence, analysis
+
+
+def _evidence_of_rows(rows, dt, update_t_s, *, loads, vehicle, tire, placard_kpa, rule) -> RadiusEvidence:
+    """What the tyre model says of the radius analysis's rows `rows` at the update times
+    (:func:`radius_evidence`)."""
     at = np.searchsorted(rows.t_s, np.asarray(update_t_s) + 0.5 * dt, side="right") - 1
     excess = np.where(at[:, None] >= 0, rows.excess[np.maximum(at, 0)], np.nan)
     # a block held aside as a possible change: that wheel's estimate may be its mean or the block, and
@@ -251,7 +264,7 @@ def radius_evidence(
     )
     lag = vibration_lag_kpa(rows.t_s - 0.5 * dt, rows.excess, rows.changes, gain, update_t_s, held=rows.held,
                             trend=rows.trend)  # fmt: skip
-    return RadiusEvidence(excess=excess, sigma=sigma, gain_per_kpa=gain, model=model, lag_kpa=lag), analysis
+    return RadiusEvidence(excess=excess, sigma=sigma, gain_per_kpa=gain, model=model, lag_kpa=lag)
 
 
 ROAD_WAVINESS = {"iso": {}, "free": {"waviness_iso_weight": 0.0, "waviness_points": 7}}
@@ -311,21 +324,23 @@ def monitor_run(
         raise InputError(f"corners must be among fl, fr, rl, rr, got {', '.join(corners) or 'none'}")
     if placard_kpa is not None and not (np.isfinite(placard_kpa) and 50.0 <= placard_kpa <= 500.0):
         raise InputError(f"--placard must be a pressure within 50–500 kPa, got {placard_kpa}")
-    table = read_parquet_table(path, what="run file")
+    schema = read_parquet_schema(path, what="run file")
     needed = ["t_s", "speed_mps"] + [f"{c}_accel_{w}_mps2" for c in corners for w in ("sprung", "unsprung")]
-    missing = [c for c in needed if c not in table.column_names]
+    missing = [c for c in needed if c not in schema.names]
     if missing:
         raise InputError(f"run file {str(path)!r} lacks column(s) {', '.join(missing)}")
     wheel = [f"{c}_wheel_speed_radps" for c in CORNERS] + list(RADIUS_COLUMNS)
-    use_radius = radius and tuple(corners) == CORNERS and all(c in table.column_names for c in wheel)
-    frame = table.select(needed + (wheel if use_radius else [])).to_pandas()
-    t = frame["t_s"].to_numpy(dtype=float)
+    use_radius = radius and tuple(corners) == CORNERS and all(c in schema.names for c in wheel)
+    # the time and speed in full (16 bytes a sample) for their checks; the rest streamed below
+    head = read_parquet_table(path, what="run file", columns=["t_s", "speed_mps"])
+    t = head.column("t_s").to_numpy().astype(float)
     check_time_axis(t, path)
     # a NaN speed is a gap the monitor skips, as is reversing; an accelerometer beyond range is
     # flagged per window
     speed = check_signals(
-        frame["speed_mps"].to_numpy(dtype=float), {}, path, refuse_accel=False, speed_gaps=True
+        head.column("speed_mps").to_numpy().astype(float), {}, path, refuse_accel=False, speed_gaps=True
     )
+    del head
     if reset_at_s is not None and not (np.isfinite(reset_at_s) and t[0] <= reset_at_s <= t[-1]):
         raise InputError(f"--reset-at must lie within the run, {t[0]:g}–{t[-1]:g} s, got {reset_at_s}")
     noise = accel_noise_mps2
@@ -333,27 +348,50 @@ def monitor_run(
         raise InputError(f"--accel-noise must be an accelerometer noise σ within 0.05–50 m/s², got {noise}")
     if road_waviness not in ROAD_WAVINESS:
         raise InputError(f"--road-waviness must be one of {', '.join(ROAD_WAVINESS)}, got {road_waviness!r}")
-    raw = (table.schema.metadata or {}).get(b"suvtwin.run")
+    raw = (schema.metadata or {}).get(b"suvtwin.run")
     meta = json.loads(raw) if raw else {}
     config = replace(config or MonitorConfig(), **ROAD_WAVINESS[road_waviness])
     recorded = run_accel_noise(meta)
     config, noise_source = assumed_accel_noise(config, recorded, accel_noise_mps2)
     load, tire_file = run_load_and_tire(meta, path)
     loads = run_loads(meta)
-    acc_s = frame[[f"{c}_accel_sprung_mps2" for c in corners]].to_numpy(dtype=float)
-    acc_u = frame[[f"{c}_accel_unsprung_mps2" for c in corners]].to_numpy(dtype=float)
-    monitor, update = monitor_signals(
-        t, speed, acc_s, acc_u, corners=corners, loads=loads,
-        tire_file=tire_file, config=config, chunk_s=chunk_s, preview=preview, vehicle=run_vehicle(meta),
-        corner_model=corner_model,
-    )  # fmt: skip
+    vehicle = run_vehicle(meta)
+    dt = stream_dt(t)
+    monitor = _new_monitor(dt, corners, loads=loads, tire_file=tire_file, config=config, preview=preview,
+                           vehicle=vehicle, corner_model=corner_model)  # fmt: skip
+    tire = load_tire(tire_file)
+    analysis = RollingRadius(wheel_positions(vehicle), dt, tire.unloaded_radius) if use_radius else None
+    static = static_wheel_loads(loads, vehicle=vehicle)
+    # streamed as a car would, in chunks of chunk_s (a Parquet batch ends early at a row group's end):
+    # memory bounded by a chunk whatever the drive's length; neither the monitor's nor the radius
+    # analysis's result depends on the chunks
+    names_s = [f"{c}_accel_sprung_mps2" for c in corners]
+    names_u = [f"{c}_accel_unsprung_mps2" for c in corners]
+    columns = names_s + names_u + (wheel if use_radius else [])
+    parts, radius_rows, i = [], [], 0
+    for batch in iter_parquet_batches(path, what="run file", columns=columns,
+                                      rows=max(int(round(chunk_s / dt)), 1)):  # fmt: skip
+        values = {name: batch.column(name).to_numpy(zero_copy_only=False).astype(float) for name in columns}
+        m = batch.num_rows
+        acc_s = np.column_stack([values[k] for k in names_s])
+        acc_u = np.column_stack([values[k] for k in names_u])
+        parts.append(monitor.update(t[i : i + m], speed[i : i + m], acc_s, acc_u))
+        if analysis is not None:  # corners are CORNERS: each sample's tyre loads from its accelerometers
+            share = tyre_load_share(acc_s, acc_u, loads=loads, vehicle=vehicle, static_loads=static)
+            radius_rows.append(analysis.update(
+                t[i : i + m], np.column_stack([values[f"{c}_wheel_speed_radps"] for c in CORNERS]),
+                *(values[k] for k in RADIUS_COLUMNS), load_share=share,
+            ))  # fmt: skip
+        i += m
+    if i != t.size:
+        raise InputError(f"run file {str(path)!r}: its columns hold {i} rows against {t.size} of t_s")
+    update = MonitorUpdate.concatenate(parts)
     rule = rule or DeflationRule()
     evidence = None
-    if use_radius:
-        evidence, analysis = radius_evidence(
-            frame, update.t_s, loads=loads, vehicle=run_vehicle(meta), tire_file=tire_file,
-            placard_kpa=placard_kpa, rule=rule,
-        )  # fmt: skip
+    if analysis is not None:
+        rows = RadiusUpdate.concatenate(radius_rows, len(CORNERS))
+        evidence = _evidence_of_rows(rows, dt, update.t_s, loads=loads, vehicle=vehicle, tire=tire,
+                                     placard_kpa=placard_kpa, rule=rule)  # fmt: skip
     warn = deflation_warnings(
         update.t_s, update.pressure_pa / 1e3, update.pressure_sigma_pa / 1e3, update.observable,
         update.speed_mps,

@@ -351,3 +351,18 @@ def test_the_stream_s_interval_is_the_same_from_a_cut_record_and_the_whole_one()
         assert stream_dt(stamps[:4001]) == stream_dt(stamps) == 1e-3
     odd = np.arange(3000) * 3e-3 + 0.5  # 333.3 Hz: no whole rate, the median interval
     assert stream_dt(odd[:1500]) == stream_dt(odd) == pytest.approx(3e-3, rel=1e-12)
+
+
+def test_the_run_file_is_streamed_and_its_row_groups_change_nothing(run_file, tmp_path):
+    # suvtwin monitor reads the accelerometers and wheel speeds in chunks (memory bounded by a chunk,
+    # not the drive's length); a Parquet batch ends early at a row group's end, so a file cut into odd
+    # row groups feeds other chunks: the same result, to the bit, as the arrays in one go
+    from suvtwin.pipeline.monitoring import monitor_run
+
+    table = pq.read_table(run_file)
+    odd = tmp_path / "groups.parquet"
+    pq.write_table(table, odd, row_group_size=3333)
+    assert pq.ParquetFile(odd).metadata.num_row_groups == 7
+    one, many = monitor_run(run_file, placard_kpa=230), monitor_run(odd, placard_kpa=230)
+    assert one.table.equals(many.table)
+    assert np.isfinite(one.table["rr_fused_pressure_kpa"]).all()
