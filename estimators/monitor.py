@@ -97,7 +97,9 @@ rectangular, linear detrend; above ``merge_above_hz`` the periodogram is average
    travel and the damper's jacking; and its tyre's stiffness and damping are scaled by the share
    of time it touches the road, Φ(W/σ_F), with the dynamic wheel load −(m_s a_s + m_us a_us)
    taken as Gaussian. Gain tables are made per (corner, rate step ``rate_step``, contact step)
-   when first needed and kept (at most ``table_slots``, least recently used replaced). Where the
+   when first needed and kept (at most ``table_slots``, least recently used replaced); a window
+   is analysed with the four around its rate and contact share blended (bilinear in the steps), so
+   its likelihood is continuous in them. Where the
    linearized travel is on a stop or the wheel off the ground more than ``max_nonlinear_share``
    of the time no linear model holds, and the window is skipped (``rough``); from
    ``nonlinear_taper_from`` to that limit its weight falls linearly to 0. What the
@@ -198,6 +200,7 @@ time (a corner model with a suspension law only): there no linear model holds.""
 
 _USED, _GAP, _CLIPPED, _IMPLAUSIBLE, _SPIKE, _SPEED, _LOW_SPEED, _ROUGH = range(len(SKIP_REASONS))
 _LEVEL_BOUNDS = (np.log(1e-8), np.log(1e-1))  # log Gd(n0), m³
+_FREQ_TOL = 1e-9  # relative tolerance of a Fourier frequency at a threshold (TyreMonitor.__init__)
 _GRAVITY = 9.81  # m/s²
 
 
@@ -313,8 +316,8 @@ class MonitorConfig:
         the travel's σ came out 10–80 % high on a MuJoCo class D run, from 1 Hz within 8 % of the
         simulated rate (``tests/test_monitor_linearization.py``).
     rate_step : float
-        Relative step of the equivalent suspension rates the gain tables are made for (the
-        rate is rounded to the nearest: error ≤ half a step).
+        Relative step of the lattice of equivalent suspension rates (and tyre contact shares) the
+        gain tables are made for; a window's tables are its four neighbours' blended.
     table_slots : int
         Most gain tables (corner and rate) kept at once; the least recently used is replaced.
     damper_distortion : bool
@@ -789,12 +792,15 @@ class TyreMonitor:
         if self.hop < 32:
             raise InputError(f"update_s = {cfg.update_s} s holds fewer than 32 samples at dt = {dt} s")
         freq = np.fft.rfftfreq(self.window, dt)
-        self._f_index = np.flatnonzero((freq > 0) & (freq <= cfg.max_frequency_hz * (1.0 + 1e-9)))
+        # thresholds on Fourier frequencies taken with a relative tolerance _FREQ_TOL: a frequency at a
+        # threshold (1 Hz is the 8th of an 8 s window) must not fall either side of it by a change of
+        # dt in the 12th digit (it did: the estimates moved by up to 7 kPa)
+        self._f_index = np.flatnonzero((freq > 0) & (freq <= cfg.max_frequency_hz * (1.0 + _FREQ_TOL)))
         fine = freq[self._f_index]
         # bands: single frequencies below merge_above_hz, groups of ~merge_width_hz above
         per_group = max(int(round(cfg.merge_width_hz * cfg.segment_s)), 1)
-        group = np.where(fine <= cfg.merge_above_hz, np.arange(fine.size), 0)
-        above = fine > cfg.merge_above_hz
+        above = fine > cfg.merge_above_hz * (1.0 + _FREQ_TOL)
+        group = np.where(~above, np.arange(fine.size), 0)
         first_above = int(np.argmax(above)) if np.any(above) else fine.size
         n_single = first_above
         group[above] = n_single + (np.arange(fine.size - first_above) // per_group)
@@ -849,7 +855,7 @@ class TyreMonitor:
         # equivalent rates (corners with a suspension law) get slots when first needed
         # Σ_f S(f) Δf / (2πf)² per band (Δf = 1/segment_s): velocity from acceleration; /(2πf)² again: travel
         omega2 = (2.0 * np.pi * self.freq) ** 2
-        in_travel = self.freq >= cfg.travel_min_hz
+        in_travel = self.freq >= cfg.travel_min_hz * (1.0 - _FREQ_TOL)
         self._travel_weight = np.where(in_travel, self._group_size / (cfg.segment_s * omega2), 0.0)
         self._travel_x_weight = self._travel_weight / omega2  # /(2πf)² once more: travel
         self._band_df = self._travel_weight * omega2  # Σ S Δf over the same band
@@ -963,36 +969,42 @@ class TyreMonitor:
         return slot
 
     def _tables_for(self, corners: np.ndarray, spec: np.ndarray):
-        """Gain-table slots for spectra `spec` (U, F, 3) of corners `corners` (U,), the share of time
-        the linearization's Gaussian travel spends on a stop or the wheel off the ground (0 for
-        corners without a suspension law), the suspension rate (N/m) and the tyre's contact share:
-        four (U,) arrays.
+        """Gain-table slots and their blend weights for spectra `spec` (U, F, 3) of corners `corners`
+        (U,): two (U, 4) arrays (:meth:`_blend`), then the share of time the linearization's Gaussian
+        travel spends on a stop or the wheel off the ground (0 for corners without a suspension
+        law), the suspension rate (N/m) and the tyre's contact share: three (U,) arrays.
 
-        A corner whose model has a suspension law gets the tables of its equivalent rate
+        A corner whose model has a suspension law is analysed at its equivalent rate
         (:func:`suvtwin.suspension_law.equivalent_spring_rate`) at the travel's and travel
         velocity's standard deviations, integrated from the spectrum of the relative acceleration
-        S11 + S22 − 2 Re S12 (less the two sensors' noise) above ``travel_min_hz``, and of its
+        S11 + S22 − 2 Re S12 (less the two sensors' noise) above ``travel_min_hz``, and at its
         tyre's equivalent stiffness and damping: the tyre pushes only while in contact, so its
         statistically linearized rate is k_t·P(contact), with the dynamic wheel load
         −(m_s a_s + m_us a_us) Gaussian of the std its spectrum gives and the tyre's static load W
         (the model's ``static_load``: the car's weight shared by its centre of gravity, loads
-        included; (m_s + m_us)·g where not given): P(contact) = Φ(W/σ_F). The others get their
-        model's tables."""
+        included; (m_s + m_us)·g where not given): P(contact) = Φ(W/σ_F). Tables are kept on a
+        lattice of rate steps and contact steps (``rate_step``); the window's tables are the four
+        lattice points around its (rate, contact) blended bilinearly in the logarithms, so the
+        likelihood is continuous in the linearization (rounded to the nearest point, an
+        infinitesimal change of a window moved it a whole step: up to 7 kPa on `warning` runs).
+        The others get their model's tables (weight 1 on the first)."""
         corners = np.asarray(corners)
-        out = corners.copy()
+        slots = np.repeat(corners[:, None], 4, axis=1)
+        weights = np.zeros(slots.shape)
+        weights[:, 0] = 1.0
         share = np.zeros(corners.shape)
         rate = np.array([self.models[c].spring_rate for c in corners.ravel()]).reshape(corners.shape)
         touch = np.ones(corners.shape)
         if not self._nonlinear:
-            return out, share, rate, touch
+            return slots, weights, share, rate, touch
+        has_law = np.array([self.models[c].suspension is not None for c in corners], dtype=bool)
+        if not has_law.any():
+            return slots, weights, share, rate, touch
         rel = spec[..., 0].real + spec[..., 1].real - 2.0 * spec[..., 2].real  # S of a_s − a_u
         rel = np.maximum(rel - 2.0 * self.noise, 0.0)
         var_v = rel @ self._travel_weight
         var_x = rel @ self._travel_x_weight
         log_step = math.log1p(self.config.rate_step)
-        has_law = np.array([self.models[c].suspension is not None for c in corners], dtype=bool)
-        if not has_law.any():
-            return out, share, rate, touch
         # every corner at once (the corners' masses, travels and clearances as arrays), one
         # equivalent-rate call per suspension law
         at = [self.models[c] for c in corners]
@@ -1003,23 +1015,39 @@ class TyreMonitor:
         weight = np.array([(qc.sprung_mass + qc.unsprung_mass) * _GRAVITY if qc.static_load is None
                            else qc.static_load for qc in at])  # the tyre's static load, N  # fmt: skip
         contact = ndtr(weight / np.sqrt(np.maximum(var_f, 1e-12)))
-        lift = np.rint(-np.log(np.maximum(contact, 0.05)) / log_step).astype(int)
         sd = np.sqrt(var_x)
         mean, k_eq = np.zeros(corners.size), rate.copy()
         for law in {qc.suspension for qc in at if qc.suspension is not None}:
             same = [i for i, qc in enumerate(at) if qc.suspension == law]
             static = np.array([at[i].static_travel for i in same])
             mean[same], k_eq[same] = equivalent_spring_rate(law, static, sd[same], np.sqrt(var_v[same]))
-        steps = np.rint(np.log(np.maximum(k_eq / rate, 1e-3)) / log_step).astype(int)
+        steps, step_w = _lattice(np.log(np.maximum(k_eq / rate, 1e-3)) / log_step)
+        lifts, lift_w = _lattice(-np.log(np.maximum(contact, 0.05)) / log_step)
         bump = np.array([qc.suspension.bump_clearance if qc.suspension else np.inf for qc in at])
         rebound = np.array([qc.suspension.rebound_clearance if qc.suspension else np.inf for qc in at])
         stops = ndtr((mean - bump) / np.maximum(sd, 1e-9)) + ndtr((-mean - rebound) / np.maximum(sd, 1e-9))
         for i in np.flatnonzero(has_law):
-            out[i] = self._slot(int(corners[i]), int(steps[i]), int(lift[i]))
+            for k, (a, b) in enumerate(((0, 0), (1, 0), (0, 1), (1, 1))):
+                w = step_w[i, a] * lift_w[i, b]
+                weights[i, k] = w
+                if w > 0.0:
+                    slots[i, k] = self._slot(int(corners[i]), int(steps[i, a]), int(lifts[i, b]))
+            slots[i, weights[i] == 0.0] = slots[i, np.argmax(weights[i])]
         share = np.where(has_law, stops + (1.0 - contact), share)
         rate = np.where(has_law, k_eq, rate)
         touch = np.where(has_law, contact, touch)
-        return out, share, rate, touch
+        return slots, weights, share, rate, touch
+
+    def _blend(self, table: np.ndarray, slots: np.ndarray, weights: np.ndarray) -> np.ndarray:
+        """Σ_k weights[:, k] table[slots[:, k]]: the rows' tables blended, (R, …) from slots and
+        weights (R, K) (zero weights skipped)."""
+        out = weights[:, 0].reshape((-1,) + (1,) * (table.ndim - 1)) * table[slots[:, 0]]
+        for k in range(1, slots.shape[1]):
+            rows = np.flatnonzero(weights[:, k] > 0.0)
+            if rows.size:
+                w = weights[rows, k].reshape((-1,) + (1,) * (table.ndim - 1))
+                out[rows] += w * table[slots[rows, k]]
+        return out
 
     # ------------------------------------------------------------------ state
     def reset(self) -> None:
@@ -1252,8 +1280,12 @@ class TyreMonitor:
                 spec[whole, 0] = self._cross_spectra(a_s[:, whole], a_u[:, whole])
             for c in np.flatnonzero(used & ~whole):
                 spec[c, 0] = self._cross_spectra(a_s[-tail[c] :, c : c + 1], a_u[-tail[c] :, c : c + 1])[0]
-            table = np.arange(n_c)[:, None]  # each corner's gain tables at this window's travel
-            table[used, 0], rough, rate_c, touch_c = self._tables_for(np.flatnonzero(used), spec[used, 0])
+            # each corner's gain tables at this window's travel, and their blend
+            table = np.repeat(np.arange(n_c)[:, None], 4, axis=1)
+            blend = np.zeros(table.shape)
+            blend[:, 0] = 1.0
+            table[used], blend[used], rough, rate_c, touch_c = self._tables_for(np.flatnonzero(used),
+                                                                                spec[used, 0])  # fmt: skip
             analysed_rate[used], analysed_touch[used] = rate_c, touch_c
             share_c = np.zeros(n_c)  # time on a stop or off the ground, per corner (0 where unused)
             share_c[used] = rough
@@ -1272,7 +1304,7 @@ class TyreMonitor:
         # and low-speed ones too: there the ratio of the two wheels' responses leaves its model
         self._feed_previews(block, status, elapsed)
         if np.any(used):
-            ll, lam = self._window_grid(spec, used, speed, table)
+            ll, lam = self._window_grid(spec, used, speed, table, blend)
             self._correct(ll, np.where(used, w_c, 0.0), used)
             s.level = self._window_level(lam, used)
         s.fit = self._moments()
@@ -1297,17 +1329,18 @@ class TyreMonitor:
             pick = (lambda x, c: x[:, c]) if ok else (lambda x, c: np.full(x.shape[0], np.nan))  # noqa: E731
             track.add(pick(a_u, f), pick(a_u, r), v, acc_s_front=pick(a_s, f), acc_s_rear=pick(a_s, r))
 
-    def _window_grid(self, spec: np.ndarray, used: np.ndarray, speed: float, table: np.ndarray):
+    def _window_grid(self, spec: np.ndarray, used: np.ndarray, speed: float, table: np.ndarray,
+                     blend: np.ndarray):  # fmt: skip
         """Log-likelihood (level integrated out) and the level's estimate of one window's spectra
-        `spec` (C, 1, F, 3) on the grid, for the corners `used` with gain-table slots `table` (C, 1)
-        (each at its analysed suspension rate and tyre contact share): two (C, D, B, G) arrays (zero
-        for the other corners); :func:`_window_loglik`. With the damper's even part
-        (:meth:`_damper_distortion`, e) the noise beside the road's signal is N(1 + e), which depends
-        on (d, p)."""
+        `spec` (C, 1, F, 3) on the grid, for the corners `used` with gain-table slots `table` (C, K)
+        blended with weights `blend` (C, K) (each at its analysed suspension rate and tyre contact
+        share, :meth:`_tables_for`): two (C, D, B, G) arrays (zero for the other corners);
+        :func:`_window_loglik`. With the damper's even part (:meth:`_damper_distortion`, e) the
+        noise beside the road's signal is N(1 + e), which depends on (d, p)."""
         n_c = len(self.models)
-        proj = np.ascontiguousarray(self._project(spec, table)[:, :, 0])  # (C, D, F)
+        proj = np.ascontiguousarray(self._project(spec[:, 0], table, blend))  # (C, D, F)
         # the damper's even part: known extra power beside the noise, N + D_f = N (1 + extra)
-        extra = self._damper_distortion(spec[:, 0], used, table) if self._distortion else None
+        extra = self._damper_distortion(spec[:, 0], used, table, blend) if self._distortion else None
         noise = np.empty((0, 0, 0, 0)) if extra is None else extra + 1.0
         weight, x, log_cv = self._band(np.array([speed]))
         weight = np.ascontiguousarray(weight[0])
@@ -1318,36 +1351,43 @@ class TyreMonitor:
         ll, lam = np.zeros(shape), np.zeros(shape)
         if inside.size == 0:
             return ll, lam
-        slot = np.where(used, table[:, 0], -1).astype(np.int64)
-        gain = self._gain
-        if self._per_window_gain:  # the gains at this window's speed, one row per corner
-            gain = self._gain[np.maximum(slot, 0)]
-            rows = np.flatnonzero(used)
-            # corners in a full car: the gain at this window's front→rear delay, all corners of one
-            # wheelbase in one call
+        rows = np.flatnonzero(used)
+        if self._per_window_gain or np.any(blend[rows, 1:] > 0.0):  # per corner, at this window's speed
+            gain = np.zeros((n_c,) + self._gain.shape[1:])
+            plain = [c for c in rows if self.models[c].full_car is None]
+            if plain:
+                gain[plain] = self._blend(self._gain, table[plain], blend[plain])
+            # corners in a full car: the gain at this window's front→rear delay (linear in the
+            # tables, so blended after), all corners and slots of one wheelbase in one call
             by_wheelbase: dict[float, list[int]] = {}
             by_contact: dict[float, list[int]] = {}
             for c in rows:
                 if self.models[c].full_car is not None:
                     by_wheelbase.setdefault(self.models[c].full_car.wheelbase, []).append(c)
                 by_contact.setdefault(self.models[c].envelope_half_length, []).append(c)
+            n_dg = shape[1] * shape[3]  # a slot's (damping, pressure) rows of the tables
             for wheelbase, same in by_wheelbase.items():
-                n_dg = shape[1] * shape[3]  # a slot's (damping, pressure) rows of the tables
-                picked = (slot[same][:, None] * n_dg + np.arange(n_dg)).ravel()
-                gain[same] = gain_at_delay(self._car_a, self._car_b, self._fine, wheelbase / speed,
-                                           band_start=self._group_start, rows=picked).reshape(
-                    len(same), shape[1], shape[3], -1)  # fmt: skip
+                pairs = [(c, k) for c in same for k in range(table.shape[1]) if blend[c, k] > 0.0]
+                picked = np.concatenate([table[c, k] * n_dg + np.arange(n_dg) for c, k in pairs])
+                parts = gain_at_delay(self._car_a, self._car_b, self._fine, wheelbase / speed,
+                                      band_start=self._group_start, rows=picked).reshape(
+                    len(pairs), shape[1], shape[3], -1)  # fmt: skip
+                for (c, k), part in zip(pairs, parts, strict=True):
+                    gain[c] += blend[c, k] * part
             # the tyre's enveloping filters the road it reads: once per contact length
             for half, same in by_contact.items():
                 if half > 0.0:
                     fine = envelope_power(self._fine / speed, half)
                     gain[same] *= np.add.reduceat(fine, self._group_start) / self._group_size
             slot = np.where(used, np.arange(n_c), -1).astype(np.int64)
+        else:
+            gain = self._gain
+            slot = np.where(used, table[:, 0], -1).astype(np.int64)
         _window_loglik(proj, noise, weight, int(inside[0]), int(inside[-1]) + 1, base, gain, slot,
                        *_LEVEL_BOUNDS, ll, lam)  # fmt: skip
         return ll, lam
 
-    def _damper_distortion(self, spec: np.ndarray, used: np.ndarray, table: np.ndarray):
+    def _damper_distortion(self, spec: np.ndarray, used: np.ndarray, table: np.ndarray, blend: np.ndarray):
         r"""Power of the damper's even part along the signal direction over the noise, e: (C, D, G, F).
 
         Per used corner with a suspension law: the suspension velocity's PSD from the window's
@@ -1356,8 +1396,9 @@ class TyreMonitor:
         (:func:`suvtwin.suspension_law.damper_even_slope`) and the rectified velocity's PSD
         (:func:`suvtwin.suspension_law.rectified_psd`) give the force pair's PSD :math:`b^2 S_{|v|}`
         (equal and opposite on body and wheel); the corner's heave quarter car (damping d of the
-        grid, the suspension rate and tyre contact share of its gain-table slot `table` (C, 1), the
-        tyre at each grid pressure; tabulated with the slot, :meth:`_fill_slot`) carries it to the
+        grid, the suspension rate and tyre contact share of its gain-table slots `table` (C, K)
+        blended by `blend` (C, K), the tyre at each grid pressure; tabulated with the slot,
+        :meth:`_fill_slot`) carries it to the
         two accelerations, projected on the signal direction. The window's likelihood then has the
         noise N(1 + e) beside the road's signal (:meth:`_window_grid`)."""
         n_c = len(self.models)
@@ -1365,7 +1406,7 @@ class TyreMonitor:
         # less the noise but not clipped per bin: a clipped periodogram of noise is biased up
         rel = spec[..., 0].real + spec[..., 1].real - 2.0 * spec[..., 2].real - 2.0 * self.noise
         omega2 = (2.0 * np.pi * self.freq) ** 2
-        vel = np.where(self.freq >= self.config.travel_min_hz, rel / omega2, 0.0)  # (C, F)
+        vel = np.where(self._travel_weight > 0.0, rel / omega2, 0.0)  # (C, F): from travel_min_hz
         df = self._group_size / self.config.segment_s
         rows = [c for c in np.flatnonzero(used) if self.models[c].suspension is not None]
         if not rows:
@@ -1378,7 +1419,7 @@ class TyreMonitor:
             same = [c for c in rows if self.models[c].suspension == law]
             slope[same] = damper_even_slope(law, sigma_v[same])
         force = slope[rows, None] ** 2 * np.maximum(s_abs, 0.0)  # (rows, F): b² S_|v|
-        out[rows] = force[:, None, None, :] * self._along[table[rows, 0]]
+        out[rows] = force[:, None, None, :] * self._blend(self._along, table[rows], blend[rows])
         return out
 
     def _window_level(self, lam: np.ndarray, used: np.ndarray) -> float:
@@ -1495,12 +1536,12 @@ class TyreMonitor:
         fine[..., 2] = X[0] * np.conj(X[1]) * k
         return np.add.reduceat(fine, self._group_start, axis=1) / self._group_size[:, None]
 
-    def _project(self, spec: np.ndarray, table: np.ndarray) -> np.ndarray:
-        """u^H S u / N for each damping: spec (R, B, F, 3) → (R, D, B, F), row r and bin b with the
-        signal direction of gain-table slot `table[r, b]`."""
-        u11 = self._u11[table][..., 0, :].transpose(0, 2, 1, 3)  # (R, D, B, F)
-        u22 = self._u22[table][..., 0, :].transpose(0, 2, 1, 3)
-        u12 = self._u12[table][..., 0, :].transpose(0, 2, 1, 3)
+    def _project(self, spec: np.ndarray, table: np.ndarray, blend: np.ndarray) -> np.ndarray:
+        """u^H S u / N for each damping: spec (C, F, 3) → (C, D, F), row c with the signal direction's
+        terms of gain-table slots `table[c]` blended by `blend[c]` (C, K)."""
+        u11 = self._blend(self._u11, table, blend)[:, :, 0]  # (C, D, F)
+        u22 = self._blend(self._u22, table, blend)[:, :, 0]
+        u12 = self._blend(self._u12, table, blend)[:, :, 0]
         sp = spec[:, None]
         return u11 * sp[..., 0].real + u22 * sp[..., 1].real + (u12 * sp[..., 2]).real
 
@@ -1587,6 +1628,20 @@ class TyreMonitor:
             spring_rate=spring_rate[None],
             tyre_contact=tyre_contact[None],
         )
+
+
+def _lattice(position: np.ndarray, snap: float = 1e-6) -> tuple[np.ndarray, np.ndarray]:
+    """The two lattice points around each `position` (in steps) and their linear weights: (U, 2)
+    ints (floor, floor + 1) and (U, 2) weights (1 − frac, frac). A point within `snap` of a lattice
+    point takes it whole (a weight below `snap` would make a table that hardly counts: a change of
+    the rate of snap·rate_step, 2e-8 by default)."""
+    lo = np.floor(position)
+    frac = position - lo
+    up = frac > 1.0 - snap
+    lo = np.where(up, lo + 1.0, lo)
+    frac = np.where(up | (frac < snap), 0.0, frac)
+    points = lo.astype(int)[:, None] + np.arange(2)
+    return points, np.stack([1.0 - frac, frac], axis=1)
 
 
 def _detrend(x: np.ndarray) -> np.ndarray:

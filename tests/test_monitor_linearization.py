@@ -168,9 +168,61 @@ def test_window_likelihood_peaks_at_the_truth_with_and_without_the_dampers_even_
     speed = 60 / 3.6
     spec = _expected_spectra(monitor, models, speed, 16e-6, 200.0, distortion)
     used = np.ones(len(models), dtype=bool)
-    table = np.arange(len(models))[:, None]
-    table[:, 0] = monitor._tables_for(np.arange(len(models)), spec[:, 0])[0]
-    ll, _ = monitor._window_grid(spec, used, speed, table)
+    table, blend = monitor._tables_for(np.arange(len(models)), spec[:, 0])[:2]
+    ll, _ = monitor._window_grid(spec, used, speed, table, blend)
     best = monitor._p_coarse[np.argmax(ll.max(axis=(1, 2)), axis=1)]
     step = monitor._p_coarse[1] - monitor._p_coarse[0]
     assert np.all(np.abs(best - 200.0) <= step), best
+
+
+def test_the_estimates_do_not_move_with_the_sampling_interval_s_last_digit(rough_loaded_run):
+    # the same samples analysed with dt and with dt one part in 1e12 off (what a median of float stamps
+    # gives): 1 Hz, the 8th Fourier frequency of an 8 s window, fell out of the travel's band with the
+    # second, and the estimates moved by up to 7 kPa on `warning` runs; now within 1e-6 kPa
+    from suvtwin.estimators.monitor import TyreMonitor
+    from suvtwin.pipeline.monitoring import corner_models
+
+    t, v, acc_s, acc_u, _, loads = _signals(rough_loaded_run)
+    out = []
+    for dt in (1e-3, 1e-3 * (1.0 + 1e-12), 1e-3 * (1.0 - 1e-12)):
+        monitor = TyreMonitor(corner_models(CORNERS, loads=loads), dt=dt)
+        out.append(monitor.update(t, v, acc_s, acc_u))
+    assert out[0].t_s.size >= 5
+    for other in out[1:]:
+        np.testing.assert_allclose(other.pressure_pa, out[0].pressure_pa, rtol=0, atol=1e-3)  # Pa
+        np.testing.assert_allclose(other.spring_rate, out[0].spring_rate, rtol=1e-9)
+
+
+def test_the_window_likelihood_is_continuous_where_the_rate_crosses_a_gain_tables_step():
+    # a window's spectrum scaled by s: its travel, so its linearized rate, grow with s, and the gain
+    # tables it is analysed with change where the rate crosses a lattice point. Rounded to the nearest
+    # table, the log-likelihood jumped there; blended, it is continuous: within 1e-6 across a change
+    # of s by 1e-12, where the same change of s moves no table
+    from suvtwin.estimators.monitor import MonitorConfig, TyreMonitor
+    from suvtwin.pipeline.monitoring import corner_models
+
+    models = corner_models(CORNERS)
+    monitor = TyreMonitor(models, dt=1e-3, config=MonitorConfig())
+    speed = 60 / 3.6
+    spec = _expected_spectra(monitor, models, speed, 64e-6, 200.0, True)
+    used = np.ones(len(models), dtype=bool)
+
+    def first_table(scale):
+        return monitor._tables_for(np.arange(len(models)), scale * spec[:, 0])[0][:, 0]
+
+    scales = np.geomspace(2.0, 30.0, 41)  # the rate from ~1.005 to ~1.07 times the linear law's
+    tables = [first_table(s) for s in scales]
+    k = next(i for i in range(40) if not np.array_equal(tables[i], tables[i + 1]))
+    lo, hi = scales[k], scales[k + 1]
+    for _ in range(60):  # bisect to where the first table changes
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if np.array_equal(first_table(mid), tables[k]) else (lo, mid)
+        if hi - lo < 1e-12:
+            break
+    assert not np.array_equal(first_table(lo), first_table(hi))
+    lls = []
+    for s in (lo, hi):
+        table, blend = monitor._tables_for(np.arange(len(models)), s * spec[:, 0])[:2]
+        lls.append(monitor._window_grid(s * spec, used, speed, table, blend)[0])
+    step = np.max(np.abs(np.diff(lls[0], axis=-1)))  # the likelihood's change along the pressure grid
+    assert np.max(np.abs(lls[1] - lls[0])) < 1e-6 * step
