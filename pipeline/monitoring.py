@@ -44,12 +44,16 @@ from suvtwin.pipeline.estimation import (
 from suvtwin.tire_stiffness import tire_stiffness_of
 
 __all__ = [
-    "CORNER_MODELS", "MonitorResult", "RADIUS_COLUMNS", "ROAD_WAVINESS", "corner_models", "monitor_run",
-    "monitor_signals", "radius_evidence", "tyre_load_share", "wheel_positions", "write_monitor",
+    "CORNER_MODELS", "MonitorResult", "RADIUS_COLUMNS", "RADIUS_WHEEL_COLUMNS", "ROAD_WAVINESS",
+    "corner_models", "monitor_run", "monitor_signals", "radius_evidence", "tyre_load_share",
+    "wheel_positions", "write_monitor",
 ]  # fmt: skip
 
 RADIUS_COLUMNS = ("yaw_rate_radps", "lat_accel_mps2", "long_accel_mps2")
 """Besides each wheel's ``{c}_wheel_speed_radps``, the columns the radius analysis reads."""
+
+RADIUS_WHEEL_COLUMNS = tuple(f"{c}_wheel_speed_radps" for c in CORNERS) + RADIUS_COLUMNS
+"""Every column the radius analysis reads: the four wheel speeds, then :data:`RADIUS_COLUMNS`."""
 
 RADIUS_MODEL_GRID_KPA = np.arange(50.0, 452.0, 2.0)
 """Pressures at which the tyre model's effective rolling radius is tabulated for the radius fusion, kPa."""
@@ -227,17 +231,28 @@ def radius_evidence(
     dt = stream_dt(t)
     analysis = RollingRadius(wheel_positions(vehicle), dt, tire.unloaded_radius, config)
     accels = [[f"{c}_accel_{w}_mps2" for c in CORNERS] for w in ("sprung", "unsprung")]
-    share = None
+    acc_s = acc_u = None
     if all(k in frame.columns for k in accels[0] + accels[1]):  # each sample's tyre loads
         acc_s, acc_u = (frame[names].to_numpy(dtype=float) for names in accels)
-        share = tyre_load_share(acc_s, acc_u, loads=loads, vehicle=vehicle)
-    rows = analysis.update(
-        t, frame[[f"{c}_wheel_speed_radps" for c in CORNERS]].to_numpy(dtype=float),
-        *(frame[k].to_numpy(dtype=float) for k in RADIUS_COLUMNS), load_share=share,
-    )  # fmt: skip
+    values = {k: frame[k].to_numpy(dtype=float) for k in RADIUS_WHEEL_COLUMNS}
+    rows = _feed_radius(analysis, t, values, acc_s, acc_u, loads=loads, vehicle=vehicle,
+                        static=static_wheel_loads(loads, vehicle=vehicle))  # fmt: skip
     evidence = _evidence_of_rows(rows, dt, update_t_s, loads=loads, vehicle=vehicle, tire=tire,
                                  placard_kpa=placard_kpa, rule=rule)  # fmt: skip
     return evidence, analysis
+
+
+def _feed_radius(analysis, t, values, acc_s, acc_u, *, loads, vehicle, static) -> RadiusUpdate:
+    """The radius analysis `analysis` fed one chunk: time `t`, the columns of
+    :data:`RADIUS_WHEEL_COLUMNS` in `values`, and where the four corners' accelerations (n, 4) are
+    given, each sample's tyre loads from them (:func:`tyre_load_share`, static loads `static`, N)."""
+    share = None
+    if acc_s is not None and acc_u is not None:
+        share = tyre_load_share(acc_s, acc_u, loads=loads, vehicle=vehicle, static_loads=static)
+    return analysis.update(
+        t, np.column_stack([values[f"{c}_wheel_speed_radps"] for c in CORNERS]),
+        *(values[k] for k in RADIUS_COLUMNS), load_share=share,
+    )  # fmt: skip
 
 
 def _evidence_of_rows(rows, dt, update_t_s, *, loads, vehicle, tire, placard_kpa, rule) -> RadiusEvidence:
@@ -329,7 +344,7 @@ def monitor_run(
     missing = [c for c in needed if c not in schema.names]
     if missing:
         raise InputError(f"run file {str(path)!r} lacks column(s) {', '.join(missing)}")
-    wheel = [f"{c}_wheel_speed_radps" for c in CORNERS] + list(RADIUS_COLUMNS)
+    wheel = list(RADIUS_WHEEL_COLUMNS)
     use_radius = radius and tuple(corners) == CORNERS and all(c in schema.names for c in wheel)
     # the time and speed in full (16 bytes a sample) for their checks; the rest streamed below
     head = read_parquet_table(path, what="run file", columns=["t_s", "speed_mps"])
@@ -377,11 +392,8 @@ def monitor_run(
         acc_u = np.column_stack([values[k] for k in names_u])
         parts.append(monitor.update(t[i : i + m], speed[i : i + m], acc_s, acc_u))
         if analysis is not None:  # corners are CORNERS: each sample's tyre loads from its accelerometers
-            share = tyre_load_share(acc_s, acc_u, loads=loads, vehicle=vehicle, static_loads=static)
-            radius_rows.append(analysis.update(
-                t[i : i + m], np.column_stack([values[f"{c}_wheel_speed_radps"] for c in CORNERS]),
-                *(values[k] for k in RADIUS_COLUMNS), load_share=share,
-            ))  # fmt: skip
+            radius_rows.append(_feed_radius(analysis, t[i : i + m], values, acc_s, acc_u, loads=loads,
+                                            vehicle=vehicle, static=static))  # fmt: skip
         i += m
     if i != t.size:
         raise InputError(f"run file {str(path)!r}: its columns hold {i} rows against {t.size} of t_s")

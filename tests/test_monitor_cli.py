@@ -366,3 +366,16 @@ def test_the_run_file_is_streamed_and_its_row_groups_change_nothing(run_file, tm
     one, many = monitor_run(run_file, placard_kpa=230), monitor_run(odd, placard_kpa=230)
     assert one.table.equals(many.table)
     assert np.isfinite(one.table["rr_fused_pressure_kpa"]).all()
+    # the radius analysis of the whole record in one go (radius_evidence, the arrays' API) is the one
+    # monitor_run fed in chunks
+    from suvtwin.estimators.deflation import DeflationRule
+    from suvtwin.pipeline.estimation import run_loads, run_vehicle
+    from suvtwin.pipeline.monitoring import radius_evidence
+
+    meta = json.loads(table.schema.metadata[b"suvtwin.run"])
+    evidence, _ = radius_evidence(table.to_pandas(), one.table["t_s"].to_numpy(), loads=run_loads(meta),
+                                  vehicle=run_vehicle(meta), tire_file=one.metadata["tire_file"],
+                                  placard_kpa=230, rule=DeflationRule())  # fmt: skip
+    for i, c in enumerate(("fl", "fr", "rl", "rr")):
+        np.testing.assert_allclose(1e3 * evidence.excess[:, i], one.table[f"{c}_radius_excess_permille"],
+                                   rtol=1e-9, atol=1e-12)  # fmt: skip
