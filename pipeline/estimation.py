@@ -12,6 +12,7 @@ metadata, if any); unsprung mass and the p0/kt0 law are the SUV's.
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -34,8 +35,11 @@ from suvtwin.suspension_law import SuspensionLaw
 
 __all__ = [
     "EstimateRun",
+    "TimeAxis",
     "check_signals",
+    "check_streamed_speed",
     "check_time_axis",
+    "check_time_chunks",
     "corner_sprung_mass",
     "estimate_run",
     "full_car_model",
@@ -43,6 +47,7 @@ __all__ = [
     "run_accel_noise",
     "run_load_and_tire",
     "score_estimate",
+    "streamed_speed",
     "write_estimate",
 ]
 
@@ -110,24 +115,67 @@ def check_time_axis(t: np.ndarray, path: str | Path) -> float:
     """The sample interval (s) of a run file's time axis `t_s`; refuses fewer than 10 samples, a
     non-finite or non-increasing axis, one off a uniform grid by more than :data:`UNIFORM_TOLERANCE`
     of an interval anywhere, and an interval outside
-    :data:`MIN_SAMPLE_INTERVAL_S`–:data:`MAX_SAMPLE_INTERVAL_S` (one message naming the file)."""
-    if t.size < 10:
-        raise InputError(f"run file {str(path)!r}: needs at least 10 samples, got {t.size}")
-    if not np.all(np.isfinite(t)):
-        raise InputError(f"run file {str(path)!r}: column(s) t_s hold NaN or infinite values")
-    step = np.diff(t)
-    if np.any(step <= 0):
-        raise InputError(f"run file {str(path)!r}: t_s must be strictly increasing")
+    :data:`MIN_SAMPLE_INTERVAL_S`–:data:`MAX_SAMPLE_INTERVAL_S` (one message naming the file).
+    The same checks as :func:`check_time_chunks` over one chunk."""
+    return check_time_chunks(lambda: iter([t]), path).dt
+
+
+@dataclass(frozen=True)
+class TimeAxis:
+    """What a run's checked time axis is: first and last stamp (s), sample count, the end-to-end mean
+    interval ``dt`` (s) and the first up to ``TIME_HEAD_STEPS`` intervals (s) as they are."""
+
+    t0: float
+    t_end: float
+    n: int
+    dt: float
+    head_steps: np.ndarray
+
+
+TIME_HEAD_STEPS = 10_000
+"""Intervals of a time axis kept whole by :func:`check_time_chunks` (the start of the record)."""
+
+
+def check_time_chunks(chunks, path: str | Path) -> TimeAxis:
+    """:func:`check_time_axis` over a time axis given in consecutive chunks: `chunks()` returns an
+    iterable of 1-D arrays (it is called twice: the first pass finds the ends, the second each
+    stamp's distance from the uniform grid between them), so a record larger than memory is checked
+    in bounded memory. The refusals and messages are :func:`check_time_axis`'s."""
+    n, t0, last, head = 0, math.nan, math.nan, []
+    for chunk in chunks():
+        c = np.asarray(chunk, dtype=float)
+        if c.size == 0:
+            continue
+        if not np.all(np.isfinite(c)):
+            raise InputError(f"run file {str(path)!r}: column(s) t_s hold NaN or infinite values")
+        if np.any(np.diff(c) <= 0) or c[0] <= last:
+            raise InputError(f"run file {str(path)!r}: t_s must be strictly increasing")
+        if n == 0:
+            t0 = float(c[0])
+        if n < TIME_HEAD_STEPS + 1:  # the first stamps, for their intervals
+            head.append(c[: TIME_HEAD_STEPS + 1 - n])
+        n += c.size
+        last = float(c[-1])
+    if n < 10:
+        raise InputError(f"run file {str(path)!r}: needs at least 10 samples, got {n}")
     # uniform to within a tenth of a sample: a logger's timestamp jitter or a float32 time column
     # (rounded to 2e-6 s at 40 s) passes, a missing sample (every later one a whole interval off) not
-    dt = float((t[-1] - t[0]) / (t.size - 1))
-    off = np.abs(t - (t[0] + np.arange(t.size) * dt))
-    if off.max() > UNIFORM_TOLERANCE * dt:
+    dt = float((last - t0) / (n - 1))
+    i, worst = 0, (0.0, 0, t0)  # the farthest stamp off the grid: its distance, index and time
+    for chunk in chunks():
+        c = np.asarray(chunk, dtype=float)
+        if c.size == 0:
+            continue
+        off = np.abs(c - (t0 + (i + np.arange(c.size)) * dt))
         at = int(np.argmax(off))
+        if off[at] > worst[0]:
+            worst = (float(off[at]), i + at, float(c[at]))
+        i += c.size
+    if worst[0] > UNIFORM_TOLERANCE * dt:
         raise InputError(
             f"run file {str(path)!r}: t_s must be uniformly sampled (to within {UNIFORM_TOLERANCE:g} of "
-            f"a sample interval; mark missing samples NaN), but sample {at} at {t[at]:g} s lies "
-            f"{off[at] / dt:.3g} intervals off the grid"
+            f"a sample interval; mark missing samples NaN), but sample {worst[1]} at {worst[2]:g} s lies "
+            f"{worst[0] / dt:.3g} intervals off the grid"
         )
     if not MIN_SAMPLE_INTERVAL_S <= dt <= MAX_SAMPLE_INTERVAL_S:
         raise InputError(
@@ -135,7 +183,7 @@ def check_time_axis(t: np.ndarray, path: str | Path) -> float:
             f"{MIN_SAMPLE_INTERVAL_S:g}–{MAX_SAMPLE_INTERVAL_S:g} s (100 kHz–20 Hz), got {dt:g}: "
             "time in ms or µs?"
         )
-    return dt
+    return TimeAxis(t0=t0, t_end=last, n=n, dt=dt, head_steps=np.diff(np.concatenate(head)))
 
 
 def check_signals(
@@ -151,28 +199,14 @@ def check_signals(
     Batch (`speed_gaps` False): refuses a missing, infinite or implausible speed (beyond
     :data:`MAX_SPEED_MPS`) and reversing (below −:data:`STANDSTILL_MPS`: the estimators model forward
     driving); a standing or creeping car's speed about zero is kept. Streamed (`speed_gaps` True,
-    the online monitor): a NaN is a gap, a negative speed (reversing, standstill) is kept (the
-    monitor skips and counts those windows as ``speed``) unless it is most of the run (the wrong
-    sign: refused), and samples beyond :data:`MAX_SPEED_MPS` or infinite become gaps (NaN) when they
-    are at most :data:`MAX_IMPLAUSIBLE_SPEED_SHARE` of the run (spikes), else the file is refused (a
-    wrong unit). With `refuse_accel`, accelerations beyond ±:data:`MAX_ACCEL_MPS2` refuse the file
-    (NaN allowed: a gap)."""
+    the online monitor): :func:`check_streamed_speed` over the one chunk, then
+    :func:`streamed_speed`. With `refuse_accel`, accelerations beyond ±:data:`MAX_ACCEL_MPS2` refuse
+    the file (NaN allowed: a gap)."""
     v = np.array(speed, dtype=float)
     where = f"run file {str(path)!r}: speed_mps"
     if speed_gaps:
-        wild = np.isinf(v) | (v > MAX_SPEED_MPS)
-        if np.mean(wild) > MAX_IMPLAUSIBLE_SPEED_SHARE:
-            raise InputError(
-                f"{where} must be within 0–{MAX_SPEED_MPS:g} m/s (reversing and gaps allowed); "
-                f"{int(wild.sum())} of {v.size} samples are beyond (e.g. {v[wild][0]:g}): the wrong unit?"
-            )
-        back = v < -STANDSTILL_MPS
-        if np.mean(back) > 0.5:
-            raise InputError(
-                f"{where} must be within 0–{MAX_SPEED_MPS:g} m/s: it is negative on {int(back.sum())} of "
-                f"{v.size} samples (e.g. {v[back][0]:g}): reversing for most of the run, or the wrong sign?"
-            )
-        v[wild] = np.nan
+        check_streamed_speed([v], path)
+        v = streamed_speed(v)
     else:
         bad = ~np.isfinite(v) | (v > MAX_SPEED_MPS) | (v < -STANDSTILL_MPS)
         if np.any(bad):
@@ -189,6 +223,47 @@ def check_signals(
                     f"run file {str(path)!r}: {name} holds {int(big.sum())} value(s) beyond "
                     f"±{MAX_ACCEL_MPS2:g} m/s² (e.g. {a[big][0]:g}): a faulty sensor or the wrong unit"
                 )
+    return v
+
+
+def _wild_speed(v: np.ndarray) -> np.ndarray:
+    return np.isinf(v) | (v > MAX_SPEED_MPS)
+
+
+def check_streamed_speed(chunks, path: str | Path) -> None:
+    """Refuse a streamed run's speed (the online monitor's; `chunks`: its consecutive 1-D arrays, m/s)
+    beyond :data:`MAX_SPEED_MPS` or infinite on more than :data:`MAX_IMPLAUSIBLE_SPEED_SHARE` of the
+    samples (the wrong unit) or below −:data:`STANDSTILL_MPS` on most of them (the wrong sign), one
+    message each. A NaN is a gap and reversing or standing is kept (the monitor skips and counts
+    those windows as ``speed``); the few wild samples become gaps (:func:`streamed_speed`)."""
+    n = n_wild = n_back = 0
+    wild_eg = back_eg = math.nan
+    for chunk in chunks:
+        v = np.asarray(chunk, dtype=float)
+        wild, back = _wild_speed(v), v < -STANDSTILL_MPS
+        if n_wild == 0 and np.any(wild):
+            wild_eg = float(v[wild][0])
+        if n_back == 0 and np.any(back):
+            back_eg = float(v[back][0])
+        n, n_wild, n_back = n + v.size, n_wild + int(wild.sum()), n_back + int(back.sum())
+    where = f"run file {str(path)!r}: speed_mps"
+    if n_wild > MAX_IMPLAUSIBLE_SPEED_SHARE * n:
+        raise InputError(
+            f"{where} must be within 0–{MAX_SPEED_MPS:g} m/s (reversing and gaps allowed); "
+            f"{n_wild} of {n} samples are beyond (e.g. {wild_eg:g}): the wrong unit?"
+        )
+    if n_back > 0.5 * n:
+        raise InputError(
+            f"{where} must be within 0–{MAX_SPEED_MPS:g} m/s: it is negative on {n_back} of "
+            f"{n} samples (e.g. {back_eg:g}): reversing for most of the run, or the wrong sign?"
+        )
+
+
+def streamed_speed(speed: np.ndarray) -> np.ndarray:
+    """A streamed run's speed as the monitor takes it (m/s): samples beyond :data:`MAX_SPEED_MPS` or
+    infinite become gaps (NaN), once :func:`check_streamed_speed` has passed the run."""
+    v = np.array(speed, dtype=float)
+    v[_wild_speed(v)] = np.nan
     return v
 
 

@@ -25,12 +25,13 @@ from suvtwin.estimators.deflation import DeflationRule, RadiusEvidence, deflatio
 from suvtwin.estimators.monitor import SKIP_REASONS, TAIL_LEVELS, MonitorConfig, MonitorUpdate, TyreMonitor
 from suvtwin.estimators.radius_fusion import RadiusModel, vibration_lag_kpa
 from suvtwin.estimators.rolling_radius import RadiusConfig, RadiusUpdate, RollingRadius, load_share
-from suvtwin.files import atomic_write, iter_parquet_batches, read_parquet_schema, read_parquet_table
+from suvtwin.files import atomic_write, iter_parquet_batches, read_parquet_schema
 from suvtwin.mjcf.tire import effective_rolling_radius, load_tire
 from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
 from suvtwin.pipeline.estimation import (
-    check_signals,
-    check_time_axis,
+    TIME_HEAD_STEPS,
+    check_streamed_speed,
+    check_time_chunks,
     corner_sprung_mass,
     full_car_model,
     linear_corner_model,
@@ -40,6 +41,7 @@ from suvtwin.pipeline.estimation import (
     run_vehicle,
     static_travels,
     static_wheel_loads,
+    streamed_speed,
 )
 from suvtwin.tire_stiffness import tire_stiffness_of
 
@@ -119,15 +121,24 @@ def stream_dt(t_s: np.ndarray) -> float:
     (the estimate at t must not depend on what follows t): 1/f for a whole rate f in Hz that the stamps'
     end-to-end mean interval gives to within 1e-4 (loggers sample at 100, 500, 1000 Hz; the end-to-end
     mean averages a stamp's jitter or float32 rounding out, ~2e-5 of an interval after 4 s at 1 kHz
-    with ±5 % jitter), else the median interval to 12 significant digits (float stamps give medians
-    that differ in the last bits with the record's length)."""
+    with ±5 % jitter), else the median of the first :data:`~suvtwin.pipeline.estimation.TIME_HEAD_STEPS`
+    intervals to 12 significant digits (float stamps give medians that differ in the last bits with
+    the record's length)."""
     t = np.asarray(t_s, dtype=float)
-    if t.size >= 2 and t[-1] > t[0]:
-        rate = (t.size - 1) / (t[-1] - t[0])
+    if t.size < 2:
+        raise InputError("a record needs at least two time stamps for its sampling interval")
+    return _stream_interval(t.size, float(t[0]), float(t[-1]), np.diff(t[: TIME_HEAD_STEPS + 1]))
+
+
+def _stream_interval(n: int, t0: float, t_end: float, head_steps: np.ndarray) -> float:
+    """:func:`stream_dt` of a record of `n` stamps from `t0` to `t_end` (s) whose first intervals are
+    `head_steps` (s)."""
+    if t_end > t0:
+        rate = (n - 1) / (t_end - t0)
         nominal = round(rate)
         if nominal >= 1 and abs(rate - nominal) <= 1e-4 * rate:
             return 1.0 / nominal
-    return float(f"{np.median(np.diff(t)):.12g}")
+    return float(f"{np.median(head_steps):.12g}")
 
 
 def monitor_signals(
@@ -346,18 +357,18 @@ def monitor_run(
         raise InputError(f"run file {str(path)!r} lacks column(s) {', '.join(missing)}")
     wheel = list(RADIUS_WHEEL_COLUMNS)
     use_radius = radius and tuple(corners) == CORNERS and all(c in schema.names for c in wheel)
-    # the time and speed in full (16 bytes a sample) for their checks; the rest streamed below
-    head = read_parquet_table(path, what="run file", columns=["t_s", "speed_mps"])
-    t = head.column("t_s").to_numpy().astype(float)
-    check_time_axis(t, path)
-    # a NaN speed is a gap the monitor skips, as is reversing; an accelerometer beyond range is
-    # flagged per window
-    speed = check_signals(
-        head.column("speed_mps").to_numpy().astype(float), {}, path, refuse_accel=False, speed_gaps=True
-    )
-    del head
-    if reset_at_s is not None and not (np.isfinite(reset_at_s) and t[0] <= reset_at_s <= t[-1]):
-        raise InputError(f"--reset-at must lie within the run, {t[0]:g}–{t[-1]:g} s, got {reset_at_s}")
+    # the time axis and the speed checked in chunks first (a record larger than memory; nothing is
+    # run on a file that would be refused); a NaN speed is a gap the monitor skips, as is reversing;
+    # an accelerometer beyond range is flagged per window
+    def column(name: str):
+        batches = iter_parquet_batches(path, what="run file", columns=[name], rows=1 << 16)
+        return (batch.column(name).to_numpy(zero_copy_only=False).astype(float) for batch in batches)
+
+    axis = check_time_chunks(lambda: column("t_s"), path)
+    check_streamed_speed(column("speed_mps"), path)
+    t0, t_end = axis.t0, axis.t_end
+    if reset_at_s is not None and not (np.isfinite(reset_at_s) and t0 <= reset_at_s <= t_end):
+        raise InputError(f"--reset-at must lie within the run, {t0:g}–{t_end:g} s, got {reset_at_s}")
     noise = accel_noise_mps2
     if noise is not None and not (np.isfinite(noise) and 0.05 <= noise <= 50.0):
         raise InputError(f"--accel-noise must be an accelerometer noise σ within 0.05–50 m/s², got {noise}")
@@ -371,7 +382,7 @@ def monitor_run(
     load, tire_file = run_load_and_tire(meta, path)
     loads = run_loads(meta)
     vehicle = run_vehicle(meta)
-    dt = stream_dt(t)
+    dt = _stream_interval(axis.n, t0, t_end, axis.head_steps)
     monitor = _new_monitor(dt, corners, loads=loads, tire_file=tire_file, config=config, preview=preview,
                            vehicle=vehicle, corner_model=corner_model)  # fmt: skip
     tire = load_tire(tire_file)
@@ -382,21 +393,21 @@ def monitor_run(
     # analysis's result depends on the chunks
     names_s = [f"{c}_accel_sprung_mps2" for c in corners]
     names_u = [f"{c}_accel_unsprung_mps2" for c in corners]
-    columns = names_s + names_u + (wheel if use_radius else [])
+    columns = ["t_s", "speed_mps"] + names_s + names_u + (wheel if use_radius else [])
     parts, radius_rows, i = [], [], 0
     for batch in iter_parquet_batches(path, what="run file", columns=columns,
                                       rows=max(int(round(chunk_s / dt)), 1)):  # fmt: skip
         values = {name: batch.column(name).to_numpy(zero_copy_only=False).astype(float) for name in columns}
-        m = batch.num_rows
+        t = values["t_s"]
         acc_s = np.column_stack([values[k] for k in names_s])
         acc_u = np.column_stack([values[k] for k in names_u])
-        parts.append(monitor.update(t[i : i + m], speed[i : i + m], acc_s, acc_u))
+        parts.append(monitor.update(t, streamed_speed(values["speed_mps"]), acc_s, acc_u))
         if analysis is not None:  # corners are CORNERS: each sample's tyre loads from its accelerometers
-            radius_rows.append(_feed_radius(analysis, t[i : i + m], values, acc_s, acc_u, loads=loads,
-                                            vehicle=vehicle, static=static))  # fmt: skip
-        i += m
-    if i != t.size:
-        raise InputError(f"run file {str(path)!r}: its columns hold {i} rows against {t.size} of t_s")
+            radius_rows.append(_feed_radius(analysis, t, values, acc_s, acc_u, loads=loads, vehicle=vehicle,
+                                            static=static))  # fmt: skip
+        i += batch.num_rows
+    if i != axis.n:
+        raise InputError(f"run file {str(path)!r}: its columns hold {i} rows against {axis.n} of t_s")
     update = MonitorUpdate.concatenate(parts)
     rule = rule or DeflationRule()
     evidence = None
@@ -407,7 +418,7 @@ def monitor_run(
     warn = deflation_warnings(
         update.t_s, update.pressure_pa / 1e3, update.pressure_sigma_pa / 1e3, update.observable,
         update.speed_mps,
-        placard_kpa=placard_kpa, reset_at_s=t[0] if reset_at_s is None else reset_at_s, rule=rule,
+        placard_kpa=placard_kpa, reset_at_s=t0 if reset_at_s is None else reset_at_s, rule=rule,
         upper_kpa=update.pressure_upper_pa / 1e3, upper_level=TAIL_LEVELS[1],
         tracks=[(corners.index(f), corners.index(r)) for f, r in (("fl", "rl"), ("fr", "rr"))
                 if f in corners and r in corners],
@@ -445,7 +456,7 @@ def monitor_run(
         "corner_model": corner_model,
         "static_travel_mm": dict(zip(corners, [1e3 * m.static_travel for m in monitor.models], strict=True)),
         "placard_kpa": placard_kpa,
-        "reset_at_s": None if placard_kpa is not None else float(t[0] if reset_at_s is None else reset_at_s),
+        "reset_at_s": None if placard_kpa is not None else float(t0 if reset_at_s is None else reset_at_s),
         "config": asdict(monitor.config),
         "road_waviness": road_waviness,
         "accel_noise": {"sigma_mps2": monitor.config.sigma_accel, "source": noise_source,

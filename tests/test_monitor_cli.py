@@ -379,3 +379,39 @@ def test_the_run_file_is_streamed_and_its_row_groups_change_nothing(run_file, tm
     for i, c in enumerate(("fl", "fr", "rl", "rr")):
         np.testing.assert_allclose(1e3 * evidence.excess[:, i], one.table[f"{c}_radius_excess_permille"],
                                    rtol=1e-9, atol=1e-12)  # fmt: skip
+
+
+def test_the_time_axis_and_speed_checked_in_chunks_are_the_whole_record_checked():
+    # suvtwin monitor checks the time axis and the speed in chunks (a record larger than memory): the
+    # same interval, refusals and messages as the whole arrays at once, a fault in any chunk found
+    from suvtwin.errors import InputError
+    from suvtwin.pipeline.estimation import (
+        check_signals,
+        check_streamed_speed,
+        check_time_axis,
+        check_time_chunks,
+    )
+
+    rng = np.random.default_rng(11)
+    t = 3.0 + np.arange(25_000) * 1e-3 + rng.uniform(-2e-5, 2e-5, 25_000)
+    pieces = lambda x: lambda: iter(np.array_split(x, 7))  # noqa: E731
+    axis = check_time_chunks(pieces(t), "r")
+    assert axis.dt == check_time_axis(t, "r") and axis.n == t.size and (axis.t0, axis.t_end) == (t[0], t[-1])
+    np.testing.assert_array_equal(axis.head_steps, np.diff(t[:10_001]))
+    border = np.array_split(t, 7)[0].size
+    faults = [(np.delete(t, 17_500), "uniformly"), (np.r_[t[:border], t[border - 1 :]], "increasing"),
+              (np.r_[t[:20_000], np.nan, t[20_001:]], "NaN")]  # fmt: skip
+    for bad, message in faults:
+        with pytest.raises(InputError, match=message) as chunked:
+            check_time_chunks(pieces(bad), "r")
+        with pytest.raises(InputError, match=message) as whole:
+            check_time_axis(bad, "r")
+        assert str(chunked.value) == str(whole.value)
+    v = np.full(t.size, 20.0)
+    v[[5, 9_000, 24_000]] = 1e4  # spikes: gaps
+    check_streamed_speed(np.array_split(v, 7), "r")
+    np.testing.assert_array_equal(np.isnan(check_signals(v, {}, "r", refuse_accel=False, speed_gaps=True)),
+                                  v > 100)  # fmt: skip
+    v[:300] = 1e4  # 1.2 % beyond 100 m/s: the wrong unit, in chunks as whole
+    with pytest.raises(InputError, match="wrong unit"):
+        check_streamed_speed(np.array_split(v, 7), "r")
