@@ -469,6 +469,7 @@ def monitor_run(
             "config": asdict(analysis.config),
             "calibration": "tyre model at the placard" if placard_kpa is not None else "learned at the reset",
             "gain_per_kpa": dict(zip(corners, evidence.gain_per_kpa.tolist(), strict=True)),
+            "substituted_samples": analysis.substituted_samples,
         },
         "warnings": {
             c: (

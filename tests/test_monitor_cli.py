@@ -415,3 +415,52 @@ def test_the_time_axis_and_speed_checked_in_chunks_are_the_whole_record_checked(
     v[:300] = 1e4  # 1.2 % beyond 100 m/s: the wrong unit, in chunks as whole
     with pytest.raises(InputError, match="wrong unit"):
         check_streamed_speed(np.array_split(v, 7), "r")
+
+
+def test_a_dead_body_accelerometer_leaves_the_radius_analysis_on_the_wheels_kinematics(run_file, tmp_path):
+    # The radius analysis gates its blocks on the body's lateral and longitudinal acceleration; with
+    # either sensor dead it used to count no sample (no tyre had a pressure with the radii). Now the
+    # wheels' kinematics stand in: a_y = v ψ̇ and a_x = dv/dt. Checked against the sensors on a run
+    # turning on a circle of 80 m while speeding up from 40 to 80 km/h, then on the monitor.
+    import pyarrow as pa
+
+    from suvtwin.estimators.rolling_radius import RollingRadius
+    from suvtwin.mjcf.tire import load_tire
+    from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
+    from suvtwin.pipeline.monitoring import wheel_positions
+    from suvtwin.pipeline.scenario import parse_scenario
+    from suvtwin.pipeline.simulator import simulate
+
+    scenario = parse_scenario({"duration_s": 16.0, "seed": 5, "speed_kmh": [[0, 40], [16, 80]],
+                               "road": {"segments": [{"length_m": 400.0, "gd_n0": 4e-6}]},
+                               "steering": {"mode": "circle", "radius_m": 80.0}}, source="test")  # fmt: skip
+    frame = simulate(scenario).table
+    t = frame["t_s"].to_numpy()
+    wheels = frame[[f"{c}_wheel_speed_radps" for c in CORNERS]].to_numpy()
+    yaw, lat, lon = (frame[k].to_numpy() for k in ("yaw_rate_radps", "lat_accel_mps2", "long_accel_mps2"))
+    analysis = RollingRadius(wheel_positions(load_vehicle()), 1e-3, load_tire().unloaded_radius)
+    dead = np.full(t.size, np.nan)
+    k_lat, k_lon = analysis._body_accelerations(t, wheels, yaw, dead, dead)
+    blocks = lambda a: np.nanmean(a[:16000].reshape(4, 4000), axis=1)  # noqa: E731  (4 s blocks)
+    # a_y 1.9–5.2 m/s² here: within 6 % (the sensor's body frame rolls); a_x 0.69 m/s² from the
+    # speed profile: the kinematics' 0.72 (the unloaded radius, 3 % above the rolling one), the
+    # sensor's 0.68–0.80 (its body frame pitches and turns)
+    np.testing.assert_allclose(blocks(k_lat), blocks(lat), rtol=0.06)
+    np.testing.assert_allclose(blocks(k_lon), blocks(lon), atol=0.1)
+    assert analysis.substituted_samples == {"lat_accel": t.size, "long_accel": t.size - 1}
+
+    table = pq.read_table(run_file)
+    assert main(["monitor", str(run_file), "--out", str(tmp_path / "clean.parquet")]) == 0
+    ref = pq.read_table(tmp_path / "clean.parquet").to_pandas()
+    for name in ("lat_accel_mps2", "long_accel_mps2"):
+        column = pa.array(np.full(table.num_rows, np.nan))
+        broken = table.set_column(table.schema.get_field_index(name), name, column)
+        pq.write_table(broken, tmp_path / "dead.parquet")  # the run's metadata kept
+        assert main(["monitor", str(tmp_path / "dead.parquet"), "--out", str(tmp_path / "m.parquet")]) == 0
+        got = pq.read_table(tmp_path / "m.parquet")
+        frame = got.to_pandas()
+        for c in CORNERS:
+            fused = f"{c}_fused_pressure_kpa"
+            np.testing.assert_allclose(frame[fused], ref[fused], atol=0.5)
+        substituted = json.loads(got.schema.metadata[b"suvtwin.monitor"])["radius"]["substituted_samples"]
+        assert substituted[name.split("_mps2")[0]] >= table.num_rows - 1
