@@ -46,7 +46,8 @@ from suvtwin.pipeline.estimation import (
 from suvtwin.tire_stiffness import tire_stiffness_of
 
 __all__ = [
-    "CORNER_MODELS", "MonitorResult", "RADIUS_COLUMNS", "RADIUS_WHEEL_COLUMNS", "ROAD_WAVINESS",
+    "CORNER_MODELS", "MonitorResult", "RADIUS_COLUMNS", "RADIUS_OPTIONAL_COLUMNS", "RADIUS_WHEEL_COLUMNS",
+    "ROAD_WAVINESS",
     "corner_models", "monitor_run", "monitor_signals", "radius_evidence", "tyre_load_share",
     "wheel_positions", "write_monitor",
 ]  # fmt: skip
@@ -55,7 +56,13 @@ RADIUS_COLUMNS = ("yaw_rate_radps", "lat_accel_mps2", "long_accel_mps2")
 """Besides each wheel's ``{c}_wheel_speed_radps``, the columns the radius analysis reads."""
 
 RADIUS_WHEEL_COLUMNS = tuple(f"{c}_wheel_speed_radps" for c in CORNERS) + RADIUS_COLUMNS
-"""Every column the radius analysis reads: the four wheel speeds, then :data:`RADIUS_COLUMNS`."""
+"""Every column the radius analysis reads: the four wheel speeds, then :data:`RADIUS_COLUMNS`. It needs
+the wheel speeds and the yaw rate; the lateral and longitudinal accelerations, where a file lacks
+them, come from the wheels' kinematics (:class:`~suvtwin.estimators.rolling_radius.RollingRadius`)."""
+
+RADIUS_OPTIONAL_COLUMNS = ("lat_accel_mps2", "long_accel_mps2")
+"""The columns of :data:`RADIUS_WHEEL_COLUMNS` a run file may lack (the analysis is then gated on the
+wheels' kinematics)."""
 
 RADIUS_MODEL_GRID_KPA = np.arange(50.0, 452.0, 2.0)
 """Pressures at which the tyre model's effective rolling radius is tabulated for the radius fusion, kPa."""
@@ -245,7 +252,7 @@ def radius_evidence(
     acc_s = acc_u = None
     if all(k in frame.columns for k in accels[0] + accels[1]):  # each sample's tyre loads
         acc_s, acc_u = (frame[names].to_numpy(dtype=float) for names in accels)
-    values = {k: frame[k].to_numpy(dtype=float) for k in RADIUS_WHEEL_COLUMNS}
+    values = {k: frame[k].to_numpy(dtype=float) for k in RADIUS_WHEEL_COLUMNS if k in frame.columns}
     rows = _feed_radius(analysis, t, values, acc_s, acc_u, loads=loads, vehicle=vehicle,
                         static=static_wheel_loads(loads, vehicle=vehicle))  # fmt: skip
     evidence = _evidence_of_rows(rows, dt, update_t_s, loads=loads, vehicle=vehicle, tire=tire,
@@ -262,7 +269,7 @@ def _feed_radius(analysis, t, values, acc_s, acc_u, *, loads, vehicle, static) -
         share = tyre_load_share(acc_s, acc_u, loads=loads, vehicle=vehicle, static_loads=static)
     return analysis.update(
         t, np.column_stack([values[f"{c}_wheel_speed_radps"] for c in CORNERS]),
-        *(values[k] for k in RADIUS_COLUMNS), load_share=share,
+        *(values.get(k, np.full(t.size, np.nan)) for k in RADIUS_COLUMNS), load_share=share,
     )  # fmt: skip
 
 
@@ -331,7 +338,8 @@ def monitor_run(
     tyres' shared loss, :func:`~suvtwin.estimators.deflation.deflation_warnings`). `preview`: fuse
     each rear tyre with the front→rear preview of its track (:func:`monitor_signals`).
     `corner_model`: how each corner's spectrum is modelled, :data:`CORNER_MODELS`. `radius`: with all
-    four corners and the run's wheel speeds, yaw rate and accelerations (:data:`RADIUS_COLUMNS`), fuse
+    four corners and the run's wheel speeds and yaw rate (its accelerations where it has them, else
+    the wheels' kinematics: :data:`RADIUS_WHEEL_COLUMNS`), fuse
     the radius analysis with the pressures (:func:`radius_evidence`; columns
     ``{c}_radius_excess_permille``, ``{c}_radius_sigma_permille``, ``{c}_fused_pressure_kpa`` and
     ``{c}_fused_sigma_kpa``: the pressure with the radii, against the tyre model within the tyres'
@@ -355,8 +363,9 @@ def monitor_run(
     missing = [c for c in needed if c not in schema.names]
     if missing:
         raise InputError(f"run file {str(path)!r} lacks column(s) {', '.join(missing)}")
-    wheel = list(RADIUS_WHEEL_COLUMNS)
-    use_radius = radius and tuple(corners) == CORNERS and all(c in schema.names for c in wheel)
+    wheel = [k for k in RADIUS_WHEEL_COLUMNS if k in schema.names]
+    needed_radius = [k for k in RADIUS_WHEEL_COLUMNS if k not in RADIUS_OPTIONAL_COLUMNS]
+    use_radius = radius and tuple(corners) == CORNERS and all(c in schema.names for c in needed_radius)
     # the time axis and the speed checked in chunks first (a record larger than memory; nothing is
     # run on a file that would be refused); a NaN speed is a gap the monitor skips, as is reversing;
     # an accelerometer beyond range is flagged per window

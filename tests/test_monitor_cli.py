@@ -464,3 +464,10 @@ def test_a_dead_body_accelerometer_leaves_the_radius_analysis_on_the_wheels_kine
             np.testing.assert_allclose(frame[fused], ref[fused], atol=0.5)
         substituted = json.loads(got.schema.metadata[b"suvtwin.monitor"])["radius"]["substituted_samples"]
         assert substituted[name.split("_mps2")[0]] >= table.num_rows - 1
+    # a file without the body's accelerations at all (wheel speeds and yaw rate only): the same
+    pq.write_table(table.drop_columns(["lat_accel_mps2", "long_accel_mps2"]), tmp_path / "none.parquet")
+    assert main(["monitor", str(tmp_path / "none.parquet"), "--out", str(tmp_path / "n.parquet")]) == 0
+    frame = pq.read_table(tmp_path / "n.parquet").to_pandas()
+    for c in CORNERS:
+        assert np.isfinite(frame[f"{c}_fused_pressure_kpa"]).all()
+        np.testing.assert_allclose(frame[f"{c}_fused_pressure_kpa"], ref[f"{c}_fused_pressure_kpa"], atol=0.5)
