@@ -41,8 +41,11 @@ the accelerometers' samples scatter by several m/s² about a steady value: gated
 D road's braking from 104 to 33 km/h (1.3 m/s²) let half of each block through. Where the lateral
 or longitudinal accelerometer is missing (a gap, a dead sensor), the gates take the wheels'
 kinematics instead: a_y = v ψ̇, a_x = dv/dt from the wheels' mean speed (a block's mean of it is
-exactly its speed change over its duration); a dead yaw-rate or wheel-speed sensor still stops the
-analysis (ψ̇ from a_y/v would be off by the body's roll, g sin φ: ~15 % at 2 m/s², 1.7 ‰ of excess).
+exactly its speed change over its duration); a missing yaw rate is taken as a_y/v, a few per cent
+off (the accelerometer reads the body's roll, v is the wheels' speed at the nominal radius), so such
+a block counts only while its mean |a_y| stays within ``max_lat_accel_no_yaw_mps2`` (0.5 m/s²: the
+turn's correction of the excess is then ≤ 3 ‰ at 58 km/h, its error ≤ 0.2 ‰). A dead wheel-speed
+sensor still stops the analysis.
 Each wheel's estimate is the mean of its recent blocks — since the last
 change, at most ``memory_blocks`` — with
 
@@ -112,6 +115,10 @@ class RadiusConfig:
         Slowest speed a sample counts at, m/s (the wheels' mean speed times the nominal radius).
     max_lat_accel_mps2, max_long_accel_mps2 : float
         Largest RMS lateral and |mean| longitudinal acceleration of a used block, m/s².
+    max_lat_accel_no_yaw_mps2 : float
+        Largest |mean| lateral acceleration of a used block whose yaw rate was guessed from it (a
+        dead yaw-rate sensor: ψ̇ = a_y/v, a few per cent off, :meth:`RollingRadius._body_motion`):
+        the turn's correction of the excess is ~2ρy, ρ = a_y/v², 3 ‰ at 0.5 m/s² and 58 km/h.
     min_valid_share : float
         Share of a block's samples that must count for the block to be used. On rough roads at speed
         the load gate (`min_load_share`) leaves out half a block or more; the gated blocks' error
@@ -157,6 +164,7 @@ class RadiusConfig:
     min_speed_mps: float = 8.0
     max_lat_accel_mps2: float = 2.0
     max_long_accel_mps2: float = 0.5
+    max_lat_accel_no_yaw_mps2: float = 0.5
     min_valid_share: float = 0.35
     memory_blocks: int = 6
     change_z: float = 5.0
@@ -175,6 +183,7 @@ class RadiusConfig:
             ("min_speed_mps", 0.0 < self.min_speed_mps <= 50.0, "(0, 50] m/s"),
             ("max_lat_accel_mps2", self.max_lat_accel_mps2 > 0.0, "> 0"),
             ("max_long_accel_mps2", self.max_long_accel_mps2 > 0.0, "> 0"),
+            ("max_lat_accel_no_yaw_mps2", self.max_lat_accel_no_yaw_mps2 > 0.0, "> 0"),
             ("min_valid_share", 0.0 < self.min_valid_share <= 1.0, "(0, 1]"),
             ("memory_blocks", 1 <= self.memory_blocks <= 10_000, "1–10000"),
             ("change_z", self.change_z > 0.0, "> 0"),
@@ -253,7 +262,7 @@ def excess_of(log_radius: npt.ArrayLike) -> np.ndarray:
 
 @dataclass
 class _State:
-    part: np.ndarray  # (k, C + 3) the current block's samples so far: excess, counted, a_x, a_y
+    part: np.ndarray  # (k, C + 4) the current block's samples so far: excess, counted, a_x, a_y, ψ̇ guessed
     pending: np.ndarray  # (C,) a block held as a possible change (NaN: none)
     pending_sd: np.ndarray  # (C,) its samples' scatter
     last: np.ndarray  # (C,) the last used block's means (NaN: none yet)
@@ -264,7 +273,7 @@ class _State:
     head: np.ndarray = field(default_factory=lambda: np.empty(0, int))  # (C,) next slot
     last_t: float = math.nan
     last_speed: float = math.nan  # the wheels' speed at the last sample, m/s
-    substituted: np.ndarray = field(default_factory=lambda: np.zeros(2, int))  # samples: a_y, a_x
+    substituted: np.ndarray = field(default_factory=lambda: np.zeros(3, int))  # samples: a_y, a_x, ψ̇
 
 
 class RollingRadius:
@@ -302,7 +311,7 @@ class RollingRadius:
         """Forget everything."""
         n_c = self.positions.shape[0]
         self._s = _State(
-            part=np.empty((0, n_c + 3)),
+            part=np.empty((0, n_c + 4)),
             pending=np.full(n_c, np.nan),
             pending_sd=np.full(n_c, np.nan),
             last=np.full(n_c, np.nan),
@@ -335,7 +344,7 @@ class RollingRadius:
     ) -> RadiusUpdate:
         """Consume samples in time order (`t_s` (n,) s, continuing the stream; `wheel_speed_radps`
         (n, C) rad/s; the others (n,), rad/s and m/s², NaN where missing: a missing acceleration is
-        taken from the wheels' kinematics, :meth:`_body_accelerations`); one row per finished block.
+        taken from the kinematics, :meth:`_body_motion`); one row per finished block.
         `load_share` (n, C), optional: each wheel's tyre load over its static load per sample
         (:func:`load_share`); a sample where a wheel's is below ``min_load_share`` does not count. A
         NaN share (that corner's accelerometer missing) is no evidence of a wheel off the ground: the
@@ -359,12 +368,12 @@ class RollingRadius:
         s = self._s
         if t.size and np.isfinite(s.last_t) and t[0] <= s.last_t:
             raise InputError(f"t_s must continue the stream: got {t[0]} s after {s.last_t} s")
-        others[1], others[2] = self._body_accelerations(t, w, *others)
+        others[0], others[1], others[2], guessed = self._body_motion(t, w, *others)
         e, ok = self.sample_excess(w, others[0])
         if load_share is not None:  # a wheel off the ground does not roll on its radius
             ok &= ~np.any(load_share < self.config.min_load_share, axis=1)  # NaN < x is False
             e[~ok] = 0.0
-        samples = np.column_stack([e, ok, others[2], others[1]])
+        samples = np.column_stack([e, ok, others[2], others[1], guessed])
         rows = []
         i = 0
         while i < t.size:
@@ -378,41 +387,54 @@ class RollingRadius:
             s.last_t = float(t[-1])
         return RadiusUpdate.concatenate(rows, n_c)
 
-    def _body_accelerations(self, t, w, yaw, lat, lon) -> tuple[np.ndarray, np.ndarray]:
-        """The lateral and longitudinal accelerations the blocks are gated on (m/s², (n,) each): the
-        sensors', and where one is missing (a gap, a dead sensor) the wheels' kinematics instead:
-        a_y = v ψ̇ (steady turning; from the yaw-rate sensor) and a_x = dv/dt (the wheels' mean
-        speed times ``nominal_radius_m``, differenced sample to sample: a block's mean is its
-        speed change over its duration, whatever the noise between). Counted in
-        :attr:`substituted_samples`."""
+    def _body_motion(self, t, w, yaw, lat, lon) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The yaw rate (rad/s) and the lateral and longitudinal accelerations (m/s²) the analysis
+        uses, (n,) each, and where the yaw rate was guessed (n,) bool: the sensors', and where one
+        is missing (a gap, a dead sensor) the wheels' kinematics instead: a_y = v ψ̇ (steady
+        turning; from the yaw-rate sensor), a_x = dv/dt (the wheels' mean speed times
+        ``nominal_radius_m``, differenced sample to sample: a block's mean is its speed change over
+        its duration, whatever the noise between) and ψ̇ = a_y/v (the lateral accelerometer
+        reads the body's roll too, and v here is a few per cent off: a block with a guessed yaw
+        rate counts only while its mean |a_y| stays within ``max_lat_accel_no_yaw_mps2``). Counted
+        in :attr:`substituted_samples`."""
         s = self._s
         finite = np.isfinite(w) & (w > 0)
         count = finite.sum(axis=1)
         speed = self.radius * np.where(finite, w, 0.0).sum(axis=1) / np.maximum(count, 1)
         speed = np.where(count > 0, speed, np.nan)
-        lat_gap, lon_gap = ~np.isfinite(lat), ~np.isfinite(lon)
+        yaw_gap, lat_gap, lon_gap = ~np.isfinite(yaw), ~np.isfinite(lat), ~np.isfinite(lon)
+        guessed = np.zeros(t.size, dtype=bool)
         if lat_gap.any():
-            lat = np.where(lat_gap, speed * yaw, lat)
-            s.substituted[0] += int(np.sum(lat_gap & np.isfinite(lat)))
+            new_lat = np.where(lat_gap, speed * yaw, lat)
+            s.substituted[0] += int(np.sum(lat_gap & np.isfinite(new_lat)))
+        else:
+            new_lat = lat
+        if yaw_gap.any():
+            moving = speed >= self.config.min_speed_mps  # below it no sample counts anyway
+            yaw = np.where(yaw_gap & moving, lat / np.where(moving, speed, 1.0), yaw)
+            guessed = yaw_gap & np.isfinite(yaw)
+            s.substituted[2] += int(guessed.sum())
         if lon_gap.any():
             before, t_before = np.r_[s.last_speed, speed[:-1]], np.r_[s.last_t, t[:-1]]
             lon = np.where(lon_gap, (speed - before) / (t - t_before), lon)
             s.substituted[1] += int(np.sum(lon_gap & np.isfinite(lon)))
         if t.size:
             s.last_speed = float(speed[-1])
-        return lat, lon
+        return yaw, new_lat, lon, guessed
 
     @property
     def substituted_samples(self) -> dict:
-        """Samples whose lateral / longitudinal acceleration came from the wheels' kinematics
-        (:meth:`_body_accelerations`) since the last reset."""
-        return {"lat_accel": int(self._s.substituted[0]), "long_accel": int(self._s.substituted[1])}
+        """Samples whose lateral / longitudinal acceleration or yaw rate came from the kinematics
+        (:meth:`_body_motion`) since the last reset."""
+        sub = self._s.substituted
+        return {"lat_accel": int(sub[0]), "long_accel": int(sub[1]), "yaw_rate": int(sub[2])}
 
     def _finish_block(self, t_end: float, block: np.ndarray) -> RadiusUpdate:
         cfg = self.config
         s = self._s
         n_c = self.positions.shape[0]
         e, ok, ax, ay = block[:, :n_c], block[:, n_c] > 0, block[:, n_c + 1], block[:, n_c + 2]
+        guessed = bool(np.any(block[:, n_c + 3] > 0))  # a yaw rate from a_y/v in the block
         counted = int(ok.sum())
         x = e.sum(axis=0) / max(counted, 1)
         sd = np.sqrt(np.maximum((e**2).sum(axis=0) / max(counted, 1) - x**2, 0.0))
@@ -422,6 +444,7 @@ class RollingRadius:
             and float(sd.max()) <= cfg.max_scatter_permille * 1e-3
             and abs(float(ax.mean())) <= cfg.max_long_accel_mps2
             and math.sqrt(float(np.mean(ay**2))) <= cfg.max_lat_accel_mps2
+            and (not guessed or abs(float(ay.mean())) <= cfg.max_lat_accel_no_yaw_mps2)
         )  # fmt: skip
         changed = np.zeros(n_c, dtype=bool)
         if used:

@@ -417,7 +417,7 @@ def test_the_time_axis_and_speed_checked_in_chunks_are_the_whole_record_checked(
         check_streamed_speed(np.array_split(v, 7), "r")
 
 
-def test_a_dead_body_accelerometer_leaves_the_radius_analysis_on_the_wheels_kinematics(run_file, tmp_path):
+def test_a_dead_body_motion_sensor_leaves_the_radius_analysis_on_the_wheels_kinematics(run_file, tmp_path):
     # The radius analysis gates its blocks on the body's lateral and longitudinal acceleration; with
     # either sensor dead it used to count no sample (no tyre had a pressure with the radii). Now the
     # wheels' kinematics stand in: a_y = v ψ̇ and a_x = dv/dt. Checked against the sensors on a run
@@ -440,19 +440,24 @@ def test_a_dead_body_accelerometer_leaves_the_radius_analysis_on_the_wheels_kine
     yaw, lat, lon = (frame[k].to_numpy() for k in ("yaw_rate_radps", "lat_accel_mps2", "long_accel_mps2"))
     analysis = RollingRadius(wheel_positions(load_vehicle()), 1e-3, load_tire().unloaded_radius)
     dead = np.full(t.size, np.nan)
-    k_lat, k_lon = analysis._body_accelerations(t, wheels, yaw, dead, dead)
+    _, k_lat, k_lon, _ = analysis._body_motion(t, wheels, yaw, dead, dead)
     blocks = lambda a: np.nanmean(a[:16000].reshape(4, 4000), axis=1)  # noqa: E731  (4 s blocks)
     # a_y 1.9–5.2 m/s² here: within 6 % (the sensor's body frame rolls); a_x 0.69 m/s² from the
     # speed profile: the kinematics' 0.72 (the unloaded radius, 3 % above the rolling one), the
     # sensor's 0.68–0.80 (its body frame pitches and turns)
     np.testing.assert_allclose(blocks(k_lat), blocks(lat), rtol=0.06)
     np.testing.assert_allclose(blocks(k_lon), blocks(lon), atol=0.1)
-    assert analysis.substituted_samples == {"lat_accel": t.size, "long_accel": t.size - 1}
+    assert analysis.substituted_samples == {"lat_accel": t.size, "long_accel": t.size - 1, "yaw_rate": 0}
+    # a dead yaw-rate sensor: ψ̇ = a_y/v, within 8 % here (v from the unloaded radius, 3 % high)
+    k_yaw, _, _, guessed = analysis._body_motion(t, wheels, dead, lat, lon)
+    assert guessed[t > 1.0].all()
+    np.testing.assert_allclose(blocks(k_yaw), blocks(yaw), rtol=0.08)
 
     table = pq.read_table(run_file)
     assert main(["monitor", str(run_file), "--out", str(tmp_path / "clean.parquet")]) == 0
     ref = pq.read_table(tmp_path / "clean.parquet").to_pandas()
-    for name in ("lat_accel_mps2", "long_accel_mps2"):
+    for name, key in (("lat_accel_mps2", "lat_accel"), ("long_accel_mps2", "long_accel"),
+                      ("yaw_rate_radps", "yaw_rate")):  # fmt: skip
         column = pa.array(np.full(table.num_rows, np.nan))
         broken = table.set_column(table.schema.get_field_index(name), name, column)
         pq.write_table(broken, tmp_path / "dead.parquet")  # the run's metadata kept
@@ -463,7 +468,7 @@ def test_a_dead_body_accelerometer_leaves_the_radius_analysis_on_the_wheels_kine
             fused = f"{c}_fused_pressure_kpa"
             np.testing.assert_allclose(frame[fused], ref[fused], atol=0.5)
         substituted = json.loads(got.schema.metadata[b"suvtwin.monitor"])["radius"]["substituted_samples"]
-        assert substituted[name.split("_mps2")[0]] >= table.num_rows - 1
+        assert substituted[key] >= 0.9 * table.num_rows  # (the yaw rate: from 8 m/s on)
     # a file without the body's accelerations at all (wheel speeds and yaw rate only): the same
     pq.write_table(table.drop_columns(["lat_accel_mps2", "long_accel_mps2"]), tmp_path / "none.parquet")
     assert main(["monitor", str(tmp_path / "none.parquet"), "--out", str(tmp_path / "n.parquet")]) == 0
