@@ -10,7 +10,10 @@ Each MuJoCo run is monitored clean and with one fault at a time, on all four cor
 - ``clipping``: the front-left unsprung accelerometer saturated (clipped at the quantile that
   cuts 29 % of its samples);
 - ``bias``: +2 m/s² offset on every accelerometer (a mounting or calibration error);
-- ``dead``: the rear-left wheel accelerometer silent (NaN) over the whole run.
+- ``dead``: the rear-left wheel accelerometer silent (NaN) over the whole run;
+- ``dead_yaw_rate``, ``dead_lat_accel``, ``dead_long_accel``: the body's yaw-rate sensor, lateral or
+  longitudinal accelerometer silent over the whole run (only the radius analysis reads them: the
+  ``fused`` numbers alone; the analysis takes the wheels' kinematics instead).
 
 Printed per case: the error at 30 s (mean, std, over runs × tyres, kPa), the ±2σ coverage after
 2 s, the windows used and skipped by reason, and the difference of the error from the clean case;
@@ -54,10 +57,31 @@ def _faults(acc_s: np.ndarray, acc_u: np.ndarray, t: np.ndarray) -> dict:
     return cases
 
 
+FILE_FAULTS = {"dead_yaw_rate": "yaw_rate_radps", "dead_lat_accel": "lat_accel_mps2",
+               "dead_long_accel": "long_accel_mps2"}  # fmt: skip
+"""Faults of the body's sensors: the column NaN throughout the run file."""
+
+
+def _fused_scores(path, t, truth):
+    """The pressure with the radii (monitor_run on the file `path`): its errors at 30 s and whether
+    each update after 2 s holds the truth within ±2σ."""
+    from suvtwin.pipeline.monitoring import monitor_run
+
+    res = monitor_run(path).table
+    idx = np.searchsorted(t, res["t_s"].to_numpy())
+    fused = res[[f"{c}_fused_pressure_kpa" for c in CORNERS]].to_numpy()
+    fsig = res[[f"{c}_fused_sigma_kpa" for c in CORNERS]].to_numpy()
+    err = fused - truth[idx]
+    k = int(np.searchsorted(res["t_s"].to_numpy(), 30.0 - 1e-6))
+    at_30 = err[k].tolist() if k < len(res) else []
+    after = res["t_s"].to_numpy() > 2.0
+    return at_30, (np.abs(err[after]) <= 2 * fsig[after]).ravel().tolist()
+
+
 def main() -> None:
     from suvtwin.estimators.monitor import SKIP_REASONS
     from suvtwin.pipeline.estimation import run_loads
-    from suvtwin.pipeline.monitoring import monitor_run, monitor_signals
+    from suvtwin.pipeline.monitoring import monitor_signals
 
     n_runs = int(sys.argv[1]) if len(sys.argv) > 1 else 12
     folder = Path(sys.argv[2]) if len(sys.argv) > 2 else Path("bench/_runs/constant")
@@ -100,28 +124,30 @@ def main() -> None:
                     faulty = faulty.set_column(faulty.column_names.index(name), name, pa.array(values[:, i]))
             tmp = scratch / f"{case}.parquet"
             pq.write_table(faulty, tmp)
-            res = monitor_run(tmp).table
-            idx = np.searchsorted(t, res["t_s"].to_numpy())
-            fused = res[[f"{c}_fused_pressure_kpa" for c in CORNERS]].to_numpy()
-            fsig = res[[f"{c}_fused_sigma_kpa" for c in CORNERS]].to_numpy()
-            err = fused - truth[idx]
-            k = int(np.searchsorted(res["t_s"].to_numpy(), 30.0 - 1e-6))
-            if k < len(res):
-                fused_errors.setdefault(case, []).extend(err[k].tolist())
-            after = res["t_s"].to_numpy() > 2.0
-            fused_inside.setdefault(case, []).extend((np.abs(err[after]) <= 2 * fsig[after]).ravel().tolist())
+            at_30, held = _fused_scores(tmp, t, truth)
+            fused_errors.setdefault(case, []).extend(at_30)
+            fused_inside.setdefault(case, []).extend(held)
+        for case, name in FILE_FAULTS.items():  # the body's sensors: the radius analysis alone reads them
+            faulty = arrow.set_column(arrow.column_names.index(name), name, pa.array(np.full(len(t), np.nan)))
+            tmp = scratch / f"{case}.parquet"
+            pq.write_table(faulty, tmp)
+            at_30, held = _fused_scores(tmp, t, truth)
+            fused_errors.setdefault(case, []).extend(at_30)
+            fused_inside.setdefault(case, []).extend(held)
     clean = np.array(errors["clean"])
     fused_clean = np.array(fused_errors["clean"])
     result = {}
-    for case in errors:
-        e = np.array(errors[case])
-        result[case] = {
-            "error_30s_mean_kpa": round(float(e.mean()), 2),
-            "error_30s_std_kpa": round(float(e.std()), 2),
-            "change_from_clean_rms_kpa": round(float(np.sqrt(np.mean((e - clean) ** 2))), 2),
-            "inside_2sigma_after_2s": round(float(np.mean(inside[case])), 3),
-            "windows": counts[case],
-        }
+    for case in fused_errors:
+        result[case] = {}
+        if case in errors:  # an accelerometer fault: the vibration monitor too
+            e = np.array(errors[case])
+            result[case] = {
+                "error_30s_mean_kpa": round(float(e.mean()), 2),
+                "error_30s_std_kpa": round(float(e.std()), 2),
+                "change_from_clean_rms_kpa": round(float(np.sqrt(np.mean((e - clean) ** 2))), 2),
+                "inside_2sigma_after_2s": round(float(np.mean(inside[case])), 3),
+                "windows": counts[case],
+            }
         f = np.array(fused_errors[case])
         result[case]["fused"] = {
             "error_30s_mean_kpa": round(float(f.mean()), 2),
