@@ -398,12 +398,13 @@ class RollingRadius:
         rate counts only while its mean |a_y| stays within ``max_lat_accel_no_yaw_mps2``). Counted
         in :attr:`substituted_samples`."""
         s = self._s
-        finite = np.isfinite(w) & (w > 0)
-        count = finite.sum(axis=1)
-        speed = self.radius * np.where(finite, w, 0.0).sum(axis=1) / np.maximum(count, 1)
-        speed = np.where(count > 0, speed, np.nan)
         yaw_gap, lat_gap, lon_gap = ~np.isfinite(yaw), ~np.isfinite(lat), ~np.isfinite(lon)
         guessed = np.zeros(t.size, dtype=bool)
+        if not (yaw_gap.any() or lat_gap.any() or lon_gap.any()):  # every sensor there: as they are
+            if t.size:
+                s.last_speed = float(self._wheel_speed(w[-1:])[0])
+            return yaw, lat, lon, guessed
+        speed = self._wheel_speed(w)
         if lat_gap.any():
             new_lat = np.where(lat_gap, speed * yaw, lat)
             s.substituted[0] += int(np.sum(lat_gap & np.isfinite(new_lat)))
@@ -421,6 +422,14 @@ class RollingRadius:
         if t.size:
             s.last_speed = float(speed[-1])
         return yaw, new_lat, lon, guessed
+
+    def _wheel_speed(self, w: np.ndarray) -> np.ndarray:
+        """The wheels' mean speed times ``nominal_radius_m`` per sample (n,), m/s, over the wheels
+        with a finite positive speed (NaN where none)."""
+        finite = np.isfinite(w) & (w > 0)
+        count = finite.sum(axis=1)
+        speed = self.radius * np.where(finite, w, 0.0).sum(axis=1) / np.maximum(count, 1)
+        return np.where(count > 0, speed, np.nan)
 
     @property
     def substituted_samples(self) -> dict:
