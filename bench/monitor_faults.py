@@ -13,7 +13,10 @@ Each MuJoCo run is monitored clean and with one fault at a time, on all four cor
 - ``dead``: the rear-left wheel accelerometer silent (NaN) over the whole run;
 - ``dead_yaw_rate``, ``dead_lat_accel``, ``dead_long_accel``: the body's yaw-rate sensor, lateral or
   longitudinal accelerometer silent over the whole run (only the radius analysis reads them: the
-  ``fused`` numbers alone; the analysis takes the wheels' kinematics instead).
+  ``fused`` numbers alone; the analysis takes the wheels' kinematics instead);
+- ``dead_wheel_speed``: the rear-left wheel-speed sensor silent over the whole run (the radius
+  analysis stops: the ``fused`` numbers are the vibration's where there is no pressure with the
+  radii, as a user reads them; ``with_radii_share`` says how often there was one).
 
 Printed per case: the error at 30 s (mean, std, over runs × tyres, kPa), the ±2σ coverage after
 2 s, the windows used and skipped by reason, and the difference of the error from the clean case;
@@ -58,8 +61,8 @@ def _faults(acc_s: np.ndarray, acc_u: np.ndarray, t: np.ndarray) -> dict:
 
 
 FILE_FAULTS = {"dead_yaw_rate": "yaw_rate_radps", "dead_lat_accel": "lat_accel_mps2",
-               "dead_long_accel": "long_accel_mps2"}  # fmt: skip
-"""Faults of the body's sensors: the column NaN throughout the run file."""
+               "dead_long_accel": "long_accel_mps2", "dead_wheel_speed": "rl_wheel_speed_radps"}  # fmt: skip
+"""Faults of the sensors only the radius analysis reads: the column NaN throughout the run file."""
 
 
 def _fused_scores(path, t, truth):
@@ -71,11 +74,15 @@ def _fused_scores(path, t, truth):
     idx = np.searchsorted(t, res["t_s"].to_numpy())
     fused = res[[f"{c}_fused_pressure_kpa" for c in CORNERS]].to_numpy()
     fsig = res[[f"{c}_fused_sigma_kpa" for c in CORNERS]].to_numpy()
+    # where there is no pressure with the radii (their analysis stopped), the vibration's, as a user has
+    here = np.isfinite(fused)
+    fused = np.where(here, fused, res[[f"{c}_pressure_hat_kpa" for c in CORNERS]].to_numpy())
+    fsig = np.where(here, fsig, res[[f"{c}_pressure_sigma_kpa" for c in CORNERS]].to_numpy())
     err = fused - truth[idx]
     k = int(np.searchsorted(res["t_s"].to_numpy(), 30.0 - 1e-6))
     at_30 = err[k].tolist() if k < len(res) else []
     after = res["t_s"].to_numpy() > 2.0
-    return at_30, (np.abs(err[after]) <= 2 * fsig[after]).ravel().tolist()
+    return at_30, (np.abs(err[after]) <= 2 * fsig[after]).ravel().tolist(), here[after].ravel().tolist()
 
 
 def main() -> None:
@@ -93,6 +100,7 @@ def main() -> None:
     counts: dict = {}
     fused_errors: dict = {}
     fused_inside: dict = {}
+    fused_here: dict = {}
     scratch = Path(tempfile.mkdtemp())
     for path in paths:
         arrow = pq.read_table(path)
@@ -124,16 +132,18 @@ def main() -> None:
                     faulty = faulty.set_column(faulty.column_names.index(name), name, pa.array(values[:, i]))
             tmp = scratch / f"{case}.parquet"
             pq.write_table(faulty, tmp)
-            at_30, held = _fused_scores(tmp, t, truth)
+            at_30, held, with_radii = _fused_scores(tmp, t, truth)
             fused_errors.setdefault(case, []).extend(at_30)
             fused_inside.setdefault(case, []).extend(held)
+            fused_here.setdefault(case, []).extend(with_radii)
         for case, name in FILE_FAULTS.items():  # the body's sensors: the radius analysis alone reads them
             faulty = arrow.set_column(arrow.column_names.index(name), name, pa.array(np.full(len(t), np.nan)))
             tmp = scratch / f"{case}.parquet"
             pq.write_table(faulty, tmp)
-            at_30, held = _fused_scores(tmp, t, truth)
+            at_30, held, with_radii = _fused_scores(tmp, t, truth)
             fused_errors.setdefault(case, []).extend(at_30)
             fused_inside.setdefault(case, []).extend(held)
+            fused_here.setdefault(case, []).extend(with_radii)
     clean = np.array(errors["clean"])
     fused_clean = np.array(fused_errors["clean"])
     result = {}
@@ -154,6 +164,7 @@ def main() -> None:
             "error_30s_std_kpa": round(float(f.std()), 2),
             "change_from_clean_rms_kpa": round(float(np.sqrt(np.mean((f - fused_clean) ** 2))), 2),
             "inside_2sigma_after_2s": round(float(np.mean(fused_inside[case])), 3),
+            "with_radii_share": round(float(np.mean(fused_here[case])), 3),
         }
     print(json.dumps({"runs": len(paths), "tyres": len(CORNERS), "cases": result}, indent=2))
 

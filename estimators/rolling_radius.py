@@ -45,7 +45,9 @@ exactly its speed change over its duration); a missing yaw rate is taken as a_y/
 off (the accelerometer reads the body's roll, v is the wheels' speed at the nominal radius), so such
 a block counts only while its mean |a_y| stays within ``max_lat_accel_no_yaw_mps2`` (0.5 m/s²: the
 turn's correction of the excess is then ≤ 3 ‰ at 58 km/h, its error ≤ 0.2 ‰). A dead wheel-speed
-sensor still stops the analysis.
+sensor still stops the analysis (every excess needs all the wheels' speeds): its samples are counted
+per wheel (:attr:`RollingRadius.silent_wheel_samples`), and the fused pressures are NaN while it lasts
+while the vibration monitor's estimates and warnings go on.
 Each wheel's estimate is the mean of its recent blocks — since the last
 change, at most ``memory_blocks`` — with
 
@@ -274,6 +276,7 @@ class _State:
     last_t: float = math.nan
     last_speed: float = math.nan  # the wheels' speed at the last sample, m/s
     substituted: np.ndarray = field(default_factory=lambda: np.zeros(3, int))  # samples: a_y, a_x, ψ̇
+    silent: np.ndarray = field(default_factory=lambda: np.zeros(0, int))  # (C,) samples a wheel read nothing
 
 
 class RollingRadius:
@@ -320,6 +323,7 @@ class RollingRadius:
             scatter=np.zeros((self.config.memory_blocks, n_c)),
             filled=np.zeros(n_c, dtype=int),
             head=np.zeros(n_c, dtype=int),
+            silent=np.zeros(n_c, dtype=int),
         )
 
     @property
@@ -370,6 +374,9 @@ class RollingRadius:
             raise InputError(f"t_s must continue the stream: got {t[0]} s after {s.last_t} s")
         others[0], others[1], others[2], guessed = self._body_motion(t, w, *others)
         e, ok = self.sample_excess(w, others[0])
+        if not ok.all():  # a wheel reading nothing (NaN or ≤ 0) while another turns: counted
+            reads = np.isfinite(w) & (w > 0.0)
+            s.silent += np.sum(~reads & reads.any(axis=1, keepdims=True), axis=0)
         if load_share is not None:  # a wheel off the ground does not roll on its radius
             ok &= ~np.any(load_share < self.config.min_load_share, axis=1)  # NaN < x is False
             e[~ok] = 0.0
@@ -430,6 +437,13 @@ class RollingRadius:
         count = finite.sum(axis=1)
         speed = self.radius * np.where(finite, w, 0.0).sum(axis=1) / np.maximum(count, 1)
         return np.where(count > 0, speed, np.nan)
+
+    @property
+    def silent_wheel_samples(self) -> np.ndarray:
+        """Per wheel (C,), the samples since the last reset where its speed was missing (NaN) or not
+        positive while another wheel's was: a gap or a dead wheel-speed sensor. Such a sample does not
+        count for any wheel (every excess needs all C speeds), so a dead sensor stops the analysis."""
+        return self._s.silent.copy()
 
     @property
     def substituted_samples(self) -> dict:

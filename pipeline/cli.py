@@ -591,6 +591,14 @@ def monitor_command(
                "radii against the others": ", its radius against the others')"}.get(warned.get("by"), ")")
         )  # fmt: skip
         typer.echo(f"  {c}: {now}{note}")
+    silent = (result.metadata.get("radius") or {}).get("silent_wheel_samples", {})
+    if any(silent.values()):
+        import pyarrow.parquet as pq
+
+        rows = max(pq.ParquetFile(run).metadata.num_rows, 1)
+        share = ", ".join(f"{c} {100.0 * n / rows:.0f} %" for c, n in silent.items() if n)
+        typer.echo(f"  radius analysis: a wheel's speed missing ({share} of the samples); the pressures "
+                   "with the radii are NaN there, the vibration's estimates and warnings stand")
 
 
 @app.command("input-estimate")

@@ -479,6 +479,8 @@ def monitor_run(
             "calibration": "tyre model at the placard" if placard_kpa is not None else "learned at the reset",
             "gain_per_kpa": dict(zip(corners, evidence.gain_per_kpa.tolist(), strict=True)),
             "substituted_samples": analysis.substituted_samples,
+            # samples a wheel's speed was missing while another's was not: the radius analysis stops there
+            "silent_wheel_samples": dict(zip(corners, analysis.silent_wheel_samples.tolist(), strict=True)),
         },
         "warnings": {
             c: (

@@ -476,3 +476,35 @@ def test_a_dead_body_motion_sensor_leaves_the_radius_analysis_on_the_wheels_kine
     for c in CORNERS:
         assert np.isfinite(frame[f"{c}_fused_pressure_kpa"]).all()
         np.testing.assert_allclose(frame[f"{c}_fused_pressure_kpa"], ref[f"{c}_fused_pressure_kpa"], atol=0.5)
+
+
+def test_a_dead_wheel_speed_sensor_leaves_the_vibration_estimates_and_says_why_the_radii_are_missing(
+    run_file, tmp_path, capsys
+):
+    # Every excess compares one wheel with all the others, so a wheel-speed sensor that reads nothing
+    # (NaN) or 0 while the car moves stops the radius analysis. That must not stop the monitor: the
+    # vibration estimates are those of the clean run to the bit, the pressures with the radii NaN,
+    # and the samples that stopped it counted per wheel in the output and said on the console.
+    import pyarrow as pa
+
+    assert main(["monitor", str(run_file), "--out", str(tmp_path / "clean.parquet")]) == 0
+    ref = pq.read_table(tmp_path / "clean.parquet").to_pandas()
+    table = pq.read_table(run_file)
+    name = "rl_wheel_speed_radps"
+    for dead in (np.full(table.num_rows, np.nan), np.zeros(table.num_rows)):
+        broken = table.set_column(table.schema.get_field_index(name), name, pa.array(dead))
+        pq.write_table(broken, tmp_path / "dead.parquet")
+        capsys.readouterr()
+        assert main(["monitor", str(tmp_path / "dead.parquet"), "--out", str(tmp_path / "m.parquet")]) == 0
+        said = capsys.readouterr().out
+        got = pq.read_table(tmp_path / "m.parquet")
+        frame = got.to_pandas()
+        for c in ("fl", "fr", "rl", "rr"):
+            np.testing.assert_array_equal(frame[f"{c}_pressure_hat_kpa"], ref[f"{c}_pressure_hat_kpa"])
+            assert np.isnan(frame[f"{c}_fused_pressure_kpa"]).all()
+        silent = json.loads(got.schema.metadata[b"suvtwin.monitor"])["radius"]["silent_wheel_samples"]
+        assert silent["rl"] >= 0.9 * table.num_rows and silent["fl"] == silent["fr"] == silent["rr"] == 0
+        assert "wheel's speed missing (rl 100 %" in said
+    # and on the clean run none is counted
+    clean = json.loads(pq.read_table(tmp_path / "clean.parquet").schema.metadata[b"suvtwin.monitor"])
+    assert clean["radius"]["silent_wheel_samples"] == {"fl": 0, "fr": 0, "rl": 0, "rr": 0}
