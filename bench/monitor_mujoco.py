@@ -1,10 +1,11 @@
 """The four-corner tyre-pressure monitor (issue 12) on MuJoCo ground truth, one scenario set at a time.
 
 Run: ``python bench/monitor_mujoco.py --set constant --runs 100 [--jobs 2] [--corner-model roll_plane]
-[--no-preview] [--road-waviness free]`` — prints JSON (``--corner-model``: the monitor's corner model,
-default the full car; ``--road-waviness``: its prior on the road's waviness, default ``iso``;
-``--no-preview``: each tyre on its own, without the front→rear preview that ``suvtwin monitor``
-uses by default).
+[--no-preview] [--road-waviness free] [--dead-sensor COLUMN]`` — prints JSON (``--corner-model``: the
+monitor's corner model, default the full car; ``--road-waviness``: its prior on the road's
+waviness, default ``iso``; ``--no-preview``: each tyre on its own, without the front→rear preview
+that ``suvtwin monitor`` uses by default; ``--dead-sensor``: a column of each run file NaN
+throughout, e.g. ``rl_wheel_speed_radps``).
 Sets (:mod:`suvtwin.pipeline.monitor_scenarios`): ``constant``, ``slow_leak``, ``drop``,
 ``low_speed``, ``warning``, ``nominal_long``, ``reset_leak`` (ours: UN R141's procedure, the
 references learned after a reset and a 20 % leak later); every road level drawn anywhere in its class
@@ -100,6 +101,29 @@ def _level_ratio(runs, extras) -> dict | None:
     return {"runs": len(ratio), "p10": float(q[0]), "median": float(q[1]), "p90": float(q[2])}
 
 
+def monitor_without(path, *, silent: str, **options):
+    """:func:`suvtwin.pipeline.monitoring.monitor_run` on the run file `path` with the column `silent` NaN
+    throughout (a dead sensor; the copy in a temporary folder, removed after)."""
+    import shutil
+    import tempfile
+
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from suvtwin.pipeline.monitoring import monitor_run
+
+    table = pq.read_table(path)
+    table = table.set_column(table.column_names.index(silent), silent,
+                             pa.array(np.full(table.num_rows, np.nan)))  # fmt: skip
+    folder = tempfile.mkdtemp()
+    try:
+        copy = Path(folder) / Path(path).name
+        pq.write_table(table, copy)
+        return monitor_run(copy, **options)
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
 def _round(obj, digits: int = 4):
     if isinstance(obj, float):  # inf (e.g. a settle time never reached) and NaN print as null
         return float(f"{obj:.{digits}g}") if np.isfinite(obj) else None
@@ -134,6 +158,8 @@ def main(argv: list[str] | None = None) -> dict:
         help="the monitor's prior on the road's waviness (suvtwin.pipeline.monitoring.ROAD_WAVINESS)")
     add("--no-preview", dest="preview", action="store_false",
         help="each tyre on its own (default: each track's two tyres fused through its front→rear preview)")
+    add("--dead-sensor", default=None, metavar="COLUMN",
+        help="monitor with this column of each run file NaN throughout (e.g. rl_wheel_speed_radps)")
     add("--discard-runs", action="store_true", help="delete run files once monitored")
     add("--simulate-only", action="store_true", help="fill the run cache, run no monitor")
     args = parser.parse_args(argv)
@@ -176,7 +202,9 @@ def main(argv: list[str] | None = None) -> dict:
             }
         if monitor_ok and not args.simulate_only and part:
             print(f"{label}: monitoring", file=sys.stderr)
-            monitor = partial(monitor_run, corner_model=args.corner_model, preview=args.preview,
+            run_monitor = monitor_run if args.dead_sensor is None else partial(monitor_without,
+                                                                                silent=args.dead_sensor)
+            monitor = partial(run_monitor, corner_model=args.corner_model, preview=args.preview,
                               road_waviness=args.road_waviness)  # fmt: skip
             t, e, cost = monitor_traces(part, paths, monitor=monitor, jobs=args.jobs,
                                         reset_at_s=args.reset_at)  # fmt: skip

@@ -66,25 +66,35 @@ __all__ = ["FusedPressure", "RadiusModel", "excess_cov", "excess_operator", "fus
            "vibration_lag_kpa", "wheel_sd"]  # fmt: skip
 
 
-def excess_operator(n_c: int) -> np.ndarray:
+def excess_operator(n_c: int, alive: npt.ArrayLike | None = None) -> np.ndarray:
     """A with (A d)_i = d_i − mean of the others' d (C, C): :func:`.rolling_radius.excess_of` as a
-    matrix (symmetric, so its rows are the excesses of the unit vectors)."""
-    return excess_of(np.eye(n_c))
+    matrix (symmetric, so its rows are the excesses of the unit vectors). `alive` (C,) bool: the
+    excesses over those wheels only (a wheel-speed sensor dead, :attr:`.RollingRadius.alive`): rows
+    and columns of the others 0."""
+    if alive is None:
+        return excess_of(np.eye(n_c))
+    alive = np.asarray(alive, dtype=bool)
+    out = np.zeros((n_c, n_c))
+    out[np.ix_(alive, alive)] = excess_of(np.eye(int(alive.sum())))
+    return out
 
 
-def excess_cov(wheel_sd: np.ndarray) -> np.ndarray:
+def excess_cov(wheel_sd: np.ndarray, alive: npt.ArrayLike | None = None) -> np.ndarray:
     """Covariance of the excesses A d of wheel values d independent with σ `wheel_sd` (…, C):
-    A diag(σ²) Aᵀ."""
+    A diag(σ²) Aᵀ (A over the wheels `alive`, :func:`excess_operator`; σ of the others not used)."""
     wheel_sd = np.asarray(wheel_sd, dtype=float)
-    a = excess_operator(wheel_sd.shape[-1])
+    if alive is not None:  # the other wheels' σ (NaN where not read) is not used
+        wheel_sd = np.where(np.asarray(alive, dtype=bool), wheel_sd, 0.0)
+    a = excess_operator(wheel_sd.shape[-1], alive)
     return (a * (wheel_sd**2)[..., None, :]) @ a.T
 
 
-def wheel_sd(excess_sd: np.ndarray) -> np.ndarray:
-    """The wheels' own σ that gives each excess the σ `excess_sd` (…, C): var(e_i) = σ²(1 + 1/(C − 1))."""
+def wheel_sd(excess_sd: np.ndarray, n_wheels: int | None = None) -> np.ndarray:
+    """The wheels' own σ that gives each excess the σ `excess_sd` (…, C): var(e_i) = σ²(1 + 1/(m − 1)),
+    m the wheels the excesses are taken over (`n_wheels`, default C)."""
     excess_sd = np.asarray(excess_sd, dtype=float)
-    n_c = excess_sd.shape[-1]
-    return excess_sd * math.sqrt((n_c - 1) / n_c)
+    m = excess_sd.shape[-1] if n_wheels is None else n_wheels
+    return excess_sd * math.sqrt((m - 1) / m)
 
 
 def gls_step(x, prior_mean, prior_info, h, resid, r):
@@ -177,7 +187,10 @@ def fuse_with_radii(
     tyre `model` with the tyres' radius spread `spread_permille` (σ, ‰) — see the module docstring.
     `iterations`: Gauss–Newton steps from the vibration estimate. `lag_kpa` (K, C): how far the
     vibration estimate may lag a change the radii saw (:func:`vibration_lag_kpa`), added to its
-    variance. A row with any NaN input gives NaN."""
+    variance. A row with a NaN pressure or σ gives NaN; where a wheel's excess is NaN (its speed
+    sensor dead: the analysis's excesses are over the other wheels, :attr:`.RollingRadius.alive`) the
+    row is fused with the excesses over the wheels that have one (two at least; the other tyres keep
+    their vibration estimates, moved only through `rho`)."""
     p = np.atleast_2d(np.asarray(p_kpa, dtype=float))
     sd = np.atleast_2d(np.asarray(sigma_kpa, dtype=float))
     e = np.atleast_2d(np.asarray(excess, dtype=float))
@@ -199,22 +212,26 @@ def fuse_with_radii(
         raise InputError(f"iterations must be a positive whole number, got {iterations!r}")
     out_p = np.full((n_k, n_c), np.nan)
     out_cov = np.full((n_k, n_c, n_c), np.nan)
-    good = np.isfinite(p) & np.isfinite(sd) & (sd > 0) & np.isfinite(e) & np.isfinite(se) & (se >= 0)
-    ok = np.all(good, axis=1)
-    if ok.any():
-        p_o, sd_o, e_o, se_o = p[ok], sd[ok], e[ok], se[ok]
+    # the wheels each row's excesses are taken over: those with one (all, or all but a dead sensor's)
+    read = np.isfinite(e) & np.isfinite(se) & (se >= 0)
+    ok = np.all(np.isfinite(p) & np.isfinite(sd) & (sd > 0), axis=1) & (read.sum(axis=1) >= 2)
+    grid = np.asarray(model.pressure_kpa, dtype=float)
+    for alive in np.unique(read[ok], axis=0):  # one batch per set of wheels read
+        rows = ok & np.all(read == alive, axis=1)
+        first = np.flatnonzero(alive)[:-1]  # any m − 1 of the m excesses hold all their information
+        p_o, sd_o, e_o, se_o = p[rows], sd[rows], e[rows][:, first], np.nan_to_num(se[rows])
         prior_info = np.linalg.inv(rho * (sd_o[:, :, None] * sd_o[:, None, :]))
-        a = excess_operator(n_c)[:-1]
-        r = excess_cov(np.sqrt(wheel_sd(se_o) ** 2 + (1e-3 * spread_permille) ** 2))[:, :-1, :-1]
-        grid = np.asarray(model.pressure_kpa, dtype=float)
+        a = excess_operator(n_c, alive)[first]
+        own = np.sqrt(wheel_sd(se_o, int(alive.sum())) ** 2 + (1e-3 * spread_permille) ** 2)
+        r = excess_cov(own, alive)[:, first][:, :, first]
         x = np.clip(p_o, grid[0], grid[-1])
         for _ in range(iterations):
             f, g = model.evaluate(x)
             h = a[None, :, :] * g[:, None, :]
-            resid = e_o[:, :-1] - f @ a.T
+            resid = e_o - f @ a.T
             x, cov = gls_step(x, p_o, prior_info, h, resid, r)
             x = np.clip(x, grid[0], grid[-1])
-        out_p[ok], out_cov[ok] = x, cov
+        out_p[rows], out_cov[rows] = x, cov
     sigma = np.sqrt(np.diagonal(out_cov, axis1=1, axis2=2))
     return FusedPressure(pressure_kpa=out_p, sigma_kpa=sigma, cov_kpa2=out_cov)
 
@@ -269,7 +286,10 @@ def vibration_lag_kpa(
     rows = np.flatnonzero(ch.any(axis=1))
     rows = rows[rows > 0]
     steps = e[rows] - e[rows - 1]  # (N, C)
-    rows, steps = rows[np.all(np.isfinite(steps), axis=1)], steps[np.all(np.isfinite(steps), axis=1)]
+    # a step over the same wheels both sides (all, or all but a dead sensor's) and at least two of them
+    same = np.all(np.isfinite(e[rows]) == np.isfinite(e[rows - 1]), axis=1)
+    same &= np.isfinite(steps).sum(axis=1) >= 2
+    rows, steps = rows[same], steps[same]
     age = t_r[:, None] - t_b[None, rows]  # (K, N)
     decay = np.where(age >= 0.0, np.exp(-np.maximum(age, 0.0) / tau_s), 0.0)
     out = decay @ _wheel_steps_kpa(steps, g) if rows.size else np.zeros((t_r.size, n_c))
@@ -280,22 +300,27 @@ def vibration_lag_kpa(
         out += np.abs(now) / g[None, :]
     if trend is not None:
         # a first-order lag trails a ramp of rate r by r τ; once the ramp ends, that lag decays as e^(−t/τ)
-        rate = np.nan_to_num(np.asarray(trend, dtype=float))
+        # (NaN for a wheel without an excess: a dead sensor's, over which the others' are not taken)
+        rate = np.where(np.isfinite(e), np.nan_to_num(np.asarray(trend, dtype=float)), np.nan)
         # the lag the last ramp up to each block leaves, and when it was set (its last block)
-        moving = np.any(rate != 0.0, axis=1)
+        moving = np.any(np.nan_to_num(rate) != 0.0, axis=1)
         last = np.maximum.accumulate(np.where(moving, np.arange(t_b.size), -1))
         ramp = np.where((last >= 0)[:, None], tau_s * _wheel_steps_kpa(rate[np.maximum(last, 0)], g), 0.0)
         since = np.where(last >= 0, t_b[np.maximum(last, 0)], -np.inf)
         now = np.maximum(at, 0)
         decay = np.where(at >= 0, np.exp(-np.maximum(t_r - since[now], 0.0) / tau_s), 0.0)
-        active = (at >= 0) & np.any(rate[now] != 0.0, axis=1)
+        active = (at >= 0) & np.any(np.nan_to_num(rate[now]) != 0.0, axis=1)
         out += ramp[now] * np.where(active, 1.0, decay)[:, None]
     return out
 
 
 def _wheel_steps_kpa(excess_step: np.ndarray, gain: np.ndarray) -> np.ndarray:
     """|Δp| per tyre (…, C), kPa, from a step of the excesses (…, C), most tyres taken as unchanged:
-    d̃ = (C − 1)/C Δe, d = d̃ − median(d̃), |d|/g (:func:`vibration_lag_kpa`)."""
-    n_c = gain.size
-    d = (n_c - 1) / n_c * excess_step
-    return np.abs(d - np.median(d, axis=-1, keepdims=True)) / gain
+    d̃ = (m − 1)/m Δe, d = d̃ − median(d̃), |d|/g (:func:`vibration_lag_kpa`), over the m wheels with
+    a finite step (the excesses' wheels; 0 for the others)."""
+    read = np.isfinite(excess_step)  # the wheels the excesses are over (a dead sensor's NaN): m of them
+    m = read.sum(axis=-1, keepdims=True)
+    d = np.where(read, (m - 1) / np.maximum(m, 1) * excess_step, np.nan)
+    with np.errstate(all="ignore"):  # a row with no step at all: NaN, then 0
+        out = np.abs(d - np.nanmedian(np.where(m > 0, d, 0.0), axis=-1, keepdims=True)) / gain
+    return np.where(read, out, 0.0)

@@ -44,10 +44,12 @@ kinematics instead: a_y = v ψ̇, a_x = dv/dt from the wheels' mean speed (a blo
 exactly its speed change over its duration); a missing yaw rate is taken as a_y/v, a few per cent
 off (the accelerometer reads the body's roll, v is the wheels' speed at the nominal radius), so such
 a block counts only while its mean |a_y| stays within ``max_lat_accel_no_yaw_mps2`` (0.5 m/s²: the
-turn's correction of the excess is then ≤ 3 ‰ at 58 km/h, its error ≤ 0.2 ‰). A dead wheel-speed
-sensor still stops the analysis (every excess needs all the wheels' speeds): its samples are counted
-per wheel (:attr:`RollingRadius.silent_wheel_samples`), and the fused pressures are NaN while it lasts
-while the vibration monitor's estimates and warnings go on.
+turn's correction of the excess is then ≤ 3 ‰ at 58 km/h, its error ≤ 0.2 ‰). A wheel-speed
+sensor that reads nothing (NaN or ≤ 0) over a whole block while the other wheels turn is taken for
+dead: from the next block the analysis runs over the other wheels (v from their mean, each excess
+over the others read, the dead wheel's NaN), every memory starting afresh (an excess over three
+wheels is another quantity than one over two); the sensor is taken back after a block where it read
+on every sample the others did. Its silent samples are counted (:attr:`RollingRadius.silent_wheel_samples`).
 Each wheel's estimate is the mean of its recent blocks — since the last
 change, at most ``memory_blocks`` — with
 
@@ -206,13 +208,13 @@ class RadiusConfig:
 @dataclass(frozen=True)
 class RadiusUpdate:
     """Rows of finished blocks (K): `t_s` (K,) the block's last sample, s; `excess`, `sigma` (K, C)
-    each wheel's log-radius excess over the other three and its σ (dimensionless, 1e-3 = 1 ‰; NaN
-    before a first used block); `blocks` (K, C) the blocks the estimate averages; `used` (K,) whether
-    the block was used; `changes` (K, C) whether the block confirmed a change of the wheel (with the
-    block held before it; every wheel's memory then starts afresh); `held` (K, C) a block held aside
-    as a possible change minus the wheel's mean (0: none), as a change it would move the excess by
-    that much; `trend` (K, C) the excess's slope, 1/s, where the estimate follows a significant ramp
-    (0 elsewhere)."""
+    each wheel's log-radius excess over the other wheels read (:attr:`RollingRadius.alive`) and its σ
+    (dimensionless, 1e-3 = 1 ‰; NaN before a first used block and for a wheel not read); `blocks`
+    (K, C) the blocks the estimate averages; `used` (K,) whether the block was used; `changes` (K, C)
+    whether the block confirmed a change of the wheel (with the block held before it; every wheel's
+    memory then starts afresh); `held` (K, C) a block held aside as a possible change minus the
+    wheel's mean (0: none), as a change it would move the excess by that much; `trend` (K, C) the
+    excess's slope, 1/s, where the estimate follows a significant ramp (0 elsewhere)."""
 
     t_s: np.ndarray
     excess: np.ndarray
@@ -264,7 +266,7 @@ def excess_of(log_radius: npt.ArrayLike) -> np.ndarray:
 
 @dataclass
 class _State:
-    part: np.ndarray  # (k, C + 4) the current block's samples so far: excess, counted, a_x, a_y, ψ̇ guessed
+    part: np.ndarray  # (k, C + 5) the current block's samples so far: ω, ψ̇, grounded, a_x, a_y, ψ̇ guessed
     pending: np.ndarray  # (C,) a block held as a possible change (NaN: none)
     pending_sd: np.ndarray  # (C,) its samples' scatter
     last: np.ndarray  # (C,) the last used block's means (NaN: none yet)
@@ -277,6 +279,7 @@ class _State:
     last_speed: float = math.nan  # the wheels' speed at the last sample, m/s
     substituted: np.ndarray = field(default_factory=lambda: np.zeros(3, int))  # samples: a_y, a_x, ψ̇
     silent: np.ndarray = field(default_factory=lambda: np.zeros(0, int))  # (C,) samples a wheel read nothing
+    alive: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))  # (C,) the wheels read now
 
 
 class RollingRadius:
@@ -314,7 +317,7 @@ class RollingRadius:
         """Forget everything."""
         n_c = self.positions.shape[0]
         self._s = _State(
-            part=np.empty((0, n_c + 4)),
+            part=np.empty((0, n_c + 5)),
             pending=np.full(n_c, np.nan),
             pending_sd=np.full(n_c, np.nan),
             last=np.full(n_c, np.nan),
@@ -324,24 +327,34 @@ class RollingRadius:
             filled=np.zeros(n_c, dtype=int),
             head=np.zeros(n_c, dtype=int),
             silent=np.zeros(n_c, dtype=int),
+            alive=np.ones(n_c, dtype=bool),
         )
 
     @property
     def state_nbytes(self) -> int:
         """Bytes of state carried between updates (bounded)."""
         s = self._s
-        arrays = (s.part, s.pending, s.pending_sd, s.last, s.last_sd, s.memory, s.scatter, s.filled, s.head)
+        arrays = (s.part, s.pending, s.pending_sd, s.last, s.last_sd, s.memory, s.scatter, s.filled, s.head,
+                  s.silent, s.alive)
         return int(sum(a.nbytes for a in arrays))
 
-    def sample_excess(self, wheel_speed_radps, yaw_rate_radps):
-        """Per sample: each wheel's log-radius excess (n, C) and whether the sample counts (n,)."""
+    def sample_excess(self, wheel_speed_radps, yaw_rate_radps, alive=None):
+        """Per sample: each wheel's log-radius excess (n, C) over the wheels `alive` (C,) bool (default
+        the analysis's current ones, :attr:`alive`; 0 for the others) and whether the sample counts (n,)."""
         w = np.ascontiguousarray(wheel_speed_radps, dtype=float)
         psi = np.ascontiguousarray(yaw_rate_radps, dtype=float)
+        alive = self._s.alive if alive is None else np.asarray(alive, dtype=np.bool_)
         e = np.zeros(w.shape)
         ok = np.zeros(w.shape[0], dtype=np.bool_)
         x, y = (np.ascontiguousarray(self.positions[:, k]) for k in (0, 1))
-        _sample_excess(w, psi, x, y, self.radius, self.config.min_speed_mps, e, ok)
+        _sample_excess(w, psi, x, y, self.radius, self.config.min_speed_mps, alive, e, ok)
         return e, ok
+
+    @property
+    def alive(self) -> np.ndarray:
+        """The wheels (C,) bool whose speeds the analysis reads now: all but those whose sensor read
+        nothing over a whole block while the others turned (and not yet read again over a whole one)."""
+        return self._s.alive.copy()
 
     def update(
         self, t_s, wheel_speed_radps, yaw_rate_radps, lat_accel_mps2, long_accel_mps2, load_share=None
@@ -373,14 +386,15 @@ class RollingRadius:
         if t.size and np.isfinite(s.last_t) and t[0] <= s.last_t:
             raise InputError(f"t_s must continue the stream: got {t[0]} s after {s.last_t} s")
         others[0], others[1], others[2], guessed = self._body_motion(t, w, *others)
-        e, ok = self.sample_excess(w, others[0])
-        if not ok.all():  # a wheel reading nothing (NaN or ≤ 0) while another turns: counted
-            reads = np.isfinite(w) & (w > 0.0)
-            s.silent += np.sum(~reads & reads.any(axis=1, keepdims=True), axis=0)
+        reads = np.isfinite(w) & (w > 0.0)
+        turning = reads.any(axis=1)
+        if not reads[turning].all():  # a wheel reading nothing (NaN or ≤ 0) while another turns: counted
+            s.silent += np.sum(~reads & turning[:, None], axis=0)
+        grounded = np.ones(t.size, dtype=bool)
         if load_share is not None:  # a wheel off the ground does not roll on its radius
-            ok &= ~np.any(load_share < self.config.min_load_share, axis=1)  # NaN < x is False
-            e[~ok] = 0.0
-        samples = np.column_stack([e, ok, others[2], others[1], guessed])
+            grounded = ~np.any(load_share < self.config.min_load_share, axis=1)  # NaN < x is False
+        # the raw inputs: the excesses are taken per block, over the wheels read then (:meth:`_finish_block`)
+        samples = np.column_stack([w, others[0], grounded, others[2], others[1], guessed])
         rows = []
         i = 0
         while i < t.size:
@@ -456,15 +470,20 @@ class RollingRadius:
         cfg = self.config
         s = self._s
         n_c = self.positions.shape[0]
-        e, ok, ax, ay = block[:, :n_c], block[:, n_c] > 0, block[:, n_c + 1], block[:, n_c + 2]
-        guessed = bool(np.any(block[:, n_c + 3] > 0))  # a yaw rate from a_y/v in the block
+        w, psi, grounded = block[:, :n_c], block[:, n_c], block[:, n_c + 1] > 0
+        ax, ay, guessed = block[:, n_c + 2], block[:, n_c + 3], bool(np.any(block[:, n_c + 4] > 0))
+        self._check_wheels(w)
+        e, ok = self.sample_excess(w, psi)
+        ok &= grounded
+        e[~ok] = 0.0
+        live = s.alive
         counted = int(ok.sum())
         x = e.sum(axis=0) / max(counted, 1)
         sd = np.sqrt(np.maximum((e**2).sum(axis=0) / max(counted, 1) - x**2, 0.0))
         ax, ay = ax[np.isfinite(ax)], ay[np.isfinite(ay)]
         used = (
             counted >= cfg.min_valid_share * self.block and ax.size > 0 and ay.size > 0
-            and float(sd.max()) <= cfg.max_scatter_permille * 1e-3
+            and float(sd[live].max()) <= cfg.max_scatter_permille * 1e-3
             and abs(float(ax.mean())) <= cfg.max_long_accel_mps2
             and math.sqrt(float(np.mean(ay**2))) <= cfg.max_lat_accel_mps2
             and (not guessed or abs(float(ay.mean())) <= cfg.max_lat_accel_no_yaw_mps2)
@@ -476,21 +495,21 @@ class RollingRadius:
             mean, var, n, rough = self._moments(skip_newest=True)
             model2 = (cfg.floor_permille * 1e-3) ** 2 + (cfg.roughness_share * np.maximum(rough, sd)) ** 2
             pred = np.sqrt(var * (1.0 + 1.0 / np.maximum(n, 1)) + model2)
-            out = (n > 0) & (np.abs(x - mean) > cfg.change_z * pred)
+            out = live & (n > 0) & (np.abs(x - mean) > cfg.change_z * pred)
             # a second block beside the one held: a change (both start the memory); else held
             changed = out & (np.abs(x - s.pending) <= cfg.change_z * np.sqrt(2.0 * var + model2))
             if changed.any():
                 # one wheel's change moves every wheel's excess (the others' mean holds it): every
                 # memory starts afresh from the two blocks since
                 s.filled[:] = 0
-                for c in range(n_c):
+                for c in np.flatnonzero(live):
                     if np.isfinite(s.last[c]):
                         self._add(c, s.last[c], s.last_sd[c])
                     self._add(c, x[c], sd[c])
                 s.pending = np.full(n_c, np.nan)
                 s.pending_sd = np.full(n_c, np.nan)
             else:
-                for c in np.flatnonzero(~out):
+                for c in np.flatnonzero(live & ~out):
                     self._add(c, x[c], sd[c])
                 s.pending = np.where(out, x, np.nan)
                 s.pending_sd = np.where(out, sd, np.nan)
@@ -513,6 +532,29 @@ class RollingRadius:
             blocks=n[None].copy(), used=np.array([used]), changes=changed[None], held=held[None],
             trend=slope[None],
         )  # fmt: skip
+
+    def _check_wheels(self, w: np.ndarray) -> None:
+        """Which wheels the block `w` (n, C) of wheel speeds is analysed over: a wheel read now that
+        read nothing (NaN or ≤ 0) over the whole block while the others turned (on at least
+        ``min_valid_share`` of its samples) is left out, and one left out that read on every sample
+        where another turned is taken back; at least two wheels stay. Where the set changes, every
+        wheel's memory starts afresh (an excess over other wheels is another quantity)."""
+        s = self._s
+        reads = np.isfinite(w) & (w > 0.0)
+        turning = reads.any(axis=1)
+        if turning.sum() < self.config.min_valid_share * self.block:
+            return
+        alive = s.alive.copy()
+        alive[alive & ~reads[turning].any(axis=0)] = False
+        alive[~s.alive & reads[turning].all(axis=0)] = True
+        if alive.sum() < 2 or np.array_equal(alive, s.alive):
+            return
+        n_c = alive.size
+        s.alive = alive
+        s.filled[:] = 0
+        s.head[:] = 0
+        s.pending, s.pending_sd = np.full(n_c, np.nan), np.full(n_c, np.nan)
+        s.last, s.last_sd = np.full(n_c, np.nan), np.full(n_c, np.nan)
 
     def _add(self, c: int, value: float, scatter: float) -> None:
         """Put one block's mean and its samples' scatter into wheel `c`'s memory."""
@@ -614,22 +656,27 @@ class RollingRadius:
 
 
 @cached_njit
-def _sample_excess(w, psi, x, y, radius, min_speed, out_e, out_ok):
+def _sample_excess(w, psi, x, y, radius, min_speed, alive, out_e, out_ok):
     """Each sample's log-radius excess per wheel (the module docstring's kinematics, δ_i = ln(u_i/v) −
-    ln ω_i, e_i = δ_i − mean of the others') into `out_e` (n, C), 0 where the sample does not count,
-    and whether it counts into `out_ok` (n,): every ω finite and positive, ψ̇ finite, v ≥ `min_speed`.
-    A compiled loop: numpy's reductions over four wheels cost about ten times more."""
+    ln ω_i, e_i = δ_i − mean of the other wheels') over the wheels `alive` (C,) bool into `out_e`
+    (n, C), 0 where the sample does not count and for the other wheels, and whether it counts into
+    `out_ok` (n,): every alive wheel's ω finite and positive, ψ̇ finite, v ≥ `min_speed`. A compiled
+    loop: numpy's reductions over four wheels cost about ten times more."""
     n, n_c = w.shape
     kin = np.empty(n_c)
+    m = 0
+    for c in range(n_c):
+        m += 1 if alive[c] else 0
     for k in range(n):
-        good = np.isfinite(psi[k])
+        good = np.isfinite(psi[k]) and m >= 2
         total = 0.0
         for c in range(n_c):
-            good = good and np.isfinite(w[k, c]) and w[k, c] > 0.0
-            total += w[k, c]
+            if alive[c]:
+                good = good and np.isfinite(w[k, c]) and w[k, c] > 0.0
+                total += w[k, c]
         if not good:
             continue
-        rim = total / n_c * radius
+        rim = total / m * radius
         v = rim
         for _ in range(2):  # v at the rear axle: the mean speed over the mean kinematic ratio
             rho = psi[k] / v
@@ -638,14 +685,17 @@ def _sample_excess(w, psi, x, y, radius, min_speed, out_e, out_ok):
                 a = 1.0 - rho * y[c]
                 b = rho * x[c]
                 kin[c] = math.sqrt(a * a + b * b)
-                mean_kin += kin[c]
-            v = rim / (mean_kin / n_c)
+                if alive[c]:
+                    mean_kin += kin[c]
+            v = rim / (mean_kin / m)
         if v < min_speed:
             continue
         out_ok[k] = True
         delta_sum = 0.0
         for c in range(n_c):
-            kin[c] = math.log(kin[c] / w[k, c])
-            delta_sum += kin[c]
+            if alive[c]:
+                kin[c] = math.log(kin[c] / w[k, c])
+                delta_sum += kin[c]
         for c in range(n_c):
-            out_e[k, c] = kin[c] - (delta_sum - kin[c]) / (n_c - 1)
+            if alive[c]:
+                out_e[k, c] = kin[c] - (delta_sum - kin[c]) / (m - 1)

@@ -279,10 +279,11 @@ def _evidence_of_rows(rows, dt, update_t_s, *, loads, vehicle, tire, placard_kpa
     at = np.searchsorted(rows.t_s, np.asarray(update_t_s) + 0.5 * dt, side="right") - 1
     excess = np.where(at[:, None] >= 0, rows.excess[np.maximum(at, 0)], np.nan)
     # a block held aside as a possible change: that wheel's estimate may be its mean or the block, and
-    # the others' memories, which took the same block in, may hold 1/(C − 1) of its step
+    # the others' memories, which took the same block in, may hold 1/(m − 1) of its step (m the wheels
+    # the excesses are over: all, or all but a dead sensor's)
     held = np.abs(np.where(at[:, None] >= 0, rows.held[np.maximum(at, 0)], 0.0))
-    n_c = len(CORNERS)
-    held = held + (held.sum(axis=1, keepdims=True) - held) / (n_c - 1)
+    m = np.maximum(np.isfinite(excess).sum(axis=1, keepdims=True), 2)
+    held = held + (held.sum(axis=1, keepdims=True) - held) / (m - 1)
     sigma = np.hypot(np.where(at[:, None] >= 0, rows.sigma[np.maximum(at, 0)], np.nan), held)
     tp = tire.to_array()
     wheel_loads = static_wheel_loads(loads, vehicle=vehicle)

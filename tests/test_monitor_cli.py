@@ -478,13 +478,15 @@ def test_a_dead_body_motion_sensor_leaves_the_radius_analysis_on_the_wheels_kine
         np.testing.assert_allclose(frame[f"{c}_fused_pressure_kpa"], ref[f"{c}_fused_pressure_kpa"], atol=0.5)
 
 
-def test_a_dead_wheel_speed_sensor_leaves_the_vibration_estimates_and_says_why_the_radii_are_missing(
+def test_a_dead_wheel_speed_sensor_leaves_the_radius_analysis_on_the_other_three_wheels(
     run_file, tmp_path, capsys
 ):
-    # Every excess compares one wheel with all the others, so a wheel-speed sensor that reads nothing
-    # (NaN) or 0 while the car moves stops the radius analysis. That must not stop the monitor: the
-    # vibration estimates are those of the clean run to the bit, the pressures with the radii NaN,
-    # and the samples that stopped it counted per wheel in the output and said on the console.
+    # A wheel-speed sensor that reads nothing (NaN) or 0 while the car moves used to stop the radius
+    # analysis (every excess compared one wheel with all the others): no tyre had a pressure with the
+    # radii. Now the analysis runs over the other three wheels: their pressures with the radii stay
+    # within a few kPa of the clean run's, the silent tyre keeps its vibration estimate (moved only by
+    # its errors' correlation with the others'), the vibration estimates are the clean run's to the
+    # bit, and the silent samples are counted per wheel in the output and said on the console.
     import pyarrow as pa
 
     assert main(["monitor", str(run_file), "--out", str(tmp_path / "clean.parquet")]) == 0
@@ -501,7 +503,14 @@ def test_a_dead_wheel_speed_sensor_leaves_the_vibration_estimates_and_says_why_t
         frame = got.to_pandas()
         for c in ("fl", "fr", "rl", "rr"):
             np.testing.assert_array_equal(frame[f"{c}_pressure_hat_kpa"], ref[f"{c}_pressure_hat_kpa"])
-            assert np.isnan(frame[f"{c}_fused_pressure_kpa"]).all()
+            assert np.isfinite(frame[f"{c}_fused_pressure_kpa"]).all()
+            assert np.isnan(frame["rl_radius_excess_permille"]).all()
+        for c in ("fl", "fr", "rr"):
+            fused = f"{c}_fused_pressure_kpa"
+            np.testing.assert_allclose(frame[fused], ref[fused], atol=3.0)
+        # the silent tyre: no radius of its own, so its σ is about its vibration σ, not the fused one's
+        assert np.all(frame["rl_fused_sigma_kpa"] >= 0.8 * frame["rl_pressure_sigma_kpa"])
+        assert np.all(frame["rl_fused_sigma_kpa"] > ref["rl_fused_sigma_kpa"])
         silent = json.loads(got.schema.metadata[b"suvtwin.monitor"])["radius"]["silent_wheel_samples"]
         assert silent["rl"] >= 0.9 * table.num_rows and silent["fl"] == silent["fr"] == silent["rr"] == 0
         assert "wheel's speed missing (rl 100 %" in said

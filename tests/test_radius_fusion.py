@@ -237,3 +237,34 @@ def test_the_lag_a_ramp_left_decays_as_a_first_order_lag_once_it_ends():
     lag = vibration_lag_kpa(t_b, none, none.astype(bool), gain, after, tau_s=tau, trend=trend)
     np.testing.assert_allclose(lag[:, 3], expect, rtol=2e-3)
     np.testing.assert_allclose(lag[:, :3], 0.0, atol=1e-9)
+
+
+def test_a_wheel_without_an_excess_fuses_the_others_as_a_three_tyre_car():
+    # A dead wheel-speed sensor: the radius analysis gives excesses over the other three wheels and
+    # NaN for it. With that tyre's vibration error uncorrelated with the others', the three tyres'
+    # fused pressures are those of the fusion built for three tyres alone (their model rows, their
+    # ρ block), and the fourth keeps its vibration estimate and σ. A row with fewer than two excesses
+    # has nothing to fuse (NaN), as a row without a pressure.
+    model = _mf_model()
+    rho = _rho(track=0.6, cross=0.2)
+    rho[3, :3] = rho[:3, 3] = 0.0
+    p_hat = np.array([[205.0, 190.0, 170.0, 230.0], [180.0, 200.0, 195.0, 160.0]])
+    sd = np.array([[12.0, 8.0, 20.0, 15.0], [9.0, 11.0, 14.0, 10.0]])
+    excess3 = np.array([[0.6e-3, -0.1e-3, -0.5e-3], [-0.2e-3, 0.5e-3, -0.3e-3]])  # over three wheels
+    se3 = np.array([[0.2e-3, 0.3e-3, 0.25e-3], [0.3e-3, 0.2e-3, 0.2e-3]])
+    nan = np.full((2, 1), np.nan)
+    fused = fuse_with_radii(p_hat, sd, rho, np.hstack([excess3, nan]), np.hstack([se3, nan]), model,
+                            spread_permille=0.8)  # fmt: skip
+    three = fuse_with_radii(p_hat[:, :3], sd[:, :3], rho[:3, :3], excess3, se3,
+                            RadiusModel(pressure_kpa=GRID, log_radius=model.log_radius[:3]),
+                            spread_permille=0.8)  # fmt: skip
+    np.testing.assert_allclose(fused.pressure_kpa[:, :3], three.pressure_kpa, rtol=1e-12)
+    np.testing.assert_allclose(fused.cov_kpa2[:, :3, :3], three.cov_kpa2, rtol=1e-10)
+    np.testing.assert_allclose(fused.pressure_kpa[:, 3], p_hat[:, 3], rtol=1e-12)
+    np.testing.assert_allclose(fused.sigma_kpa[:, 3], sd[:, 3], rtol=1e-12)
+    # the radii moved the three: not their vibration estimates
+    assert np.max(np.abs(fused.pressure_kpa[:, :3] - p_hat[:, :3])) > 1.0
+    # one excess only: nothing to compare it with
+    lone = fuse_with_radii(p_hat, sd, rho, [[0.1e-3, np.nan, np.nan, np.nan]] * 2, [[0.2e-3, np.nan, np.nan,
+                           np.nan]] * 2, model)  # fmt: skip
+    assert np.isnan(lone.pressure_kpa).all()

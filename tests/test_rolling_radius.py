@@ -79,8 +79,8 @@ def test_chunking_does_not_change_the_result_and_the_state_is_bounded():
                        np.zeros(777)[: min(777, n - i)]) for i in range(0, n, 777)]  # fmt: skip
     for name in ("t_s", "excess", "sigma", "blocks", "used", "changes", "held", "trend"):
         np.testing.assert_array_equal(np.concatenate([getattr(p, name) for p in parts]), getattr(whole, name))
-    # the memory's 5 blocks and at most one block's samples (400 × (4 + 3))
-    assert whole.blocks.max() == 5 and ra.state_nbytes <= 400 * 7 * 8 + 1000
+    # the memory's 5 blocks and at most one block's raw samples (400 × (4 wheel speeds + 5 others))
+    assert whole.blocks.max() == 5 and ra.state_nbytes <= 400 * 9 * 8 + 1000
     # causal: a record cut at a block's end gives that block's row
     z = np.zeros(4000)
     cut = RollingRadius(POS, 0.01, R0, cfg).update(t[:4000], w[:4000], yaw[:4000], z, z)
@@ -493,3 +493,36 @@ def test_the_radii_warn_one_tyre_against_the_others_before_any_reference_is_lear
     # all four alike: the radii see nothing
     w = deflation_warnings(t, p, sig, obs, rule=rule, radius=RadiusEvidence(excess_of(four), sd, gains))
     assert np.isnan(w.warning_time_s).all() and np.nanmax(w.relative_probability) < 1e-6
+
+
+def test_a_dead_wheel_speed_sensor_leaves_the_analysis_on_the_other_three_and_is_taken_back():
+    # A wheel-speed sensor that reads nothing while the others turn used to stop the analysis (every
+    # excess needed all four). Now the analysis goes on over the wheels read: checked against an
+    # analysis built for those three wheels alone on the same stream (a turn, one tyre 3 ‰ small, a
+    # pressure change half way), and the sensor is taken back once it reads again.
+    n = 9000  # 90 s at 100 Hz: 22 blocks of 4 s
+    radii = np.tile(R0 * np.array([1.0, 1.0, 0.997, 1.0]), (n, 1))
+    radii[n // 2 :, 1] *= 0.996  # the front right's tyre loses pressure
+    v = 20.0 + 2.0 * np.sin(np.arange(n) * 0.001)
+    yaw = 0.03 * np.sin(np.arange(n) * 0.002)
+    w = _wheel_speeds(radii, v, yaw) * (1.0 + 2e-4 * np.random.default_rng(4).standard_normal((n, 4)))
+    t, zero = np.arange(n) * 0.01, np.zeros(n)
+    cfg = RadiusConfig(max_lat_accel_mps2=10.0)
+    for dead_value in (np.nan, 0.0):
+        broken = w.copy()
+        broken[: 6 * 1000, 3] = dead_value  # rear right silent for 60 s, then back
+        ra = RollingRadius(POS, 0.01, R0, cfg)
+        rows = ra.update(t, broken, yaw, zero, zero)
+        three = RollingRadius(POS[:3], 0.01, R0, cfg).update(t[:6000], w[:6000, :3], yaw[:6000], zero[:6000],
+                                                                 zero[:6000])  # fmt: skip
+        # the rows while the sensor is silent: the three-wheel analysis's, bit for bit; the dead wheel NaN
+        np.testing.assert_array_equal(rows.excess[:15, :3], three.excess)
+        np.testing.assert_array_equal(rows.sigma[:15, :3], three.sigma)
+        assert np.isnan(rows.excess[:15, 3]).all()
+        # the front right's change seen over three wheels: its excess over the other two falls by its
+        # radius's 4 ‰ (within a block's share: the change fell inside a block the memory holds)
+        assert rows.excess[14, 1] - rows.excess[9, 1] == pytest.approx(-4e-3, abs=5e-4)
+        # back from the block after it read again: all four, the memory started afresh
+        assert ra.alive.all() and np.isfinite(rows.excess[-1]).all()
+        np.testing.assert_allclose(rows.excess[-1], excess_of(np.log(radii[-1])), atol=3e-4)
+        assert ra.silent_wheel_samples.tolist() == [0, 0, 0, 6000]
