@@ -268,11 +268,12 @@ def _fuse_radius(p, sd, rho, ref, radius: RadiusEvidence, k: int, calibration, r
     `ref` + L̂ (C,) and Λ⁻¹ (C, C), kPa and kPa²: the radii compare the tyres against their own state
     at the reset, so the reference's error cancels from the contrasts they pin."""
     n_c = p.size
-    e0, cov0 = calibration
-    h = excess_operator(n_c) * np.asarray(radius.gain_per_kpa, dtype=float)[None, :]
-    y = radius.excess[k] - e0
-    r = excess_cov(wheel_sd(radius.sigma[k])) + cov0
-    h, y, r = h[:-1], y[:-1], r[:-1, :-1]
+    e0, cov0, read = calibration
+    first = np.flatnonzero(read)[:-1]  # any m − 1 of the m wheels' excesses hold all their information
+    h = excess_operator(n_c, read) * np.asarray(radius.gain_per_kpa, dtype=float)[None, :]
+    y = np.nan_to_num(radius.excess[k] - e0)
+    r = excess_cov(wheel_sd(radius.sigma[k], int(read.sum())), read) + cov0
+    h, y, r = h[first], y[first], r[np.ix_(first, first)]
     info_v = np.linalg.inv(rho * (np.outer(sd, sd) + np.outer(ref_sd, ref_sd)))
     loss0 = p - ref
     loss, cov = gls_step(loss0, loss0, info_v, h, y - h @ loss0, r)
@@ -372,10 +373,14 @@ def deflation_warnings(
             prob[k, c] = _below(keep * ref_now[c], p[k, c], spread)
             rel[c], rel_sd[c] = p[k, c] / ref_now[c], spread / ref_now[c]
         informed = np.zeros(n_c, dtype=bool)
-        if radius is not None and placard_kpa is None and np.all(np.isfinite(radius.excess[k])):
+        # the wheels the radii's excesses are over at this row (all, or all but a dead sensor's): a
+        # calibration holds while they are the same wheels (an excess over others is another quantity)
+        read = np.isfinite(radius.excess[k]) if radius is not None else np.zeros(n_c, dtype=bool)
+        radii_here = read.sum() >= 2
+        if radius is not None and placard_kpa is None and radii_here:
             if early is None and t[k] - reset_at_s >= rule.radius_learn_s:
                 early = (radius.excess[k].copy(), radius.sigma[k].copy(), p[k].copy())
-            if early is not None:
+            if early is not None and np.array_equal(read, np.isfinite(early[0])):
                 relative[k] = _relative_loss(radius, k, early, rule.detect_fraction)
         if model_fused is not None and np.isfinite(model_fused.pressure_kpa[k]).all():
             # against the tyre model within the tyres' spread: a placard reference decides on it
@@ -386,9 +391,11 @@ def deflation_warnings(
                     prob[k, c] = _below(keep * ref_now[c], fused[k, c], fused_sd[k, c])
                 informed[:] = True
         learned_all = placard_kpa is None and not np.isnan(ref_now).any()
-        if radius is not None and learned_all and np.all(np.isfinite(radius.excess[k])):
-            if calibration is None:  # the radii as they were when the references were learned
-                calibration = (radius.excess[k].copy(), excess_cov(wheel_sd(radius.sigma[k])))
+        if calibration is None and radius is not None and learned_all and radii_here:
+            # the radii as they were when the references were learned, and over which wheels
+            calibration = (radius.excess[k].copy(),
+                           excess_cov(wheel_sd(radius.sigma[k], int(read.sum())), read), read)  # fmt: skip
+        if calibration is not None and learned_all and np.array_equal(read, calibration[2]):
             sd_k = sig[k] if radius.lag_kpa is None else np.hypot(sig[k], radius.lag_kpa[k])
             fused[k], cov = _fuse_radius(p[k], sd_k, rho, ref_now, radius, k, calibration, ref_sig)
             fused_sd[k], fused_cov[k] = np.sqrt(np.diag(cov)), cov

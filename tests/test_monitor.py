@@ -463,3 +463,41 @@ def test_the_free_waviness_prior_keeps_sigma_honest_on_a_road_of_another_wavines
             assert np.mean(np.abs(error[after]) <= 2.0 * sigma[after]) >= 0.95
             assert np.all(np.abs(error[-1]) <= 3.0 * sigma[-1])
     assert at_10s["iso"] > at_10s["free"] + 10e3
+
+
+def test_learned_references_with_a_dead_wheel_speed_sensor_are_the_three_tyre_cars():
+    # With learned references the radii are calibrated after the reset and compared with that state;
+    # with one wheel's speed sensor dead the excesses are over the other three (NaN for it). With that
+    # tyre's errors uncorrelated with the others', the three tyres' fused pressures, σ and relative-loss
+    # probabilities must be those of the same rule run on the three tyres alone, and the front left's
+    # loss (30 kPa at 100 s, seen by the radii only) must be warned there as it is there.
+    from suvtwin.estimators.deflation import RadiusEvidence
+
+    t = np.arange(1, 61) * 4.0
+    n_k = t.size
+    p = np.full((n_k, 4), 200.0) + np.array([0.0, 5.0, -5.0, 3.0])
+    sd = np.full((n_k, 4), 8.0)
+    gain = np.array([7.4e-5, 7.3e-5, 7.2e-5, 7.2e-5])
+    three = [0, 1, 3]
+    d = np.zeros((n_k, 3))
+    d[t >= 100.0, 0] = -gain[0] * 30.0  # the front left's radius after its loss
+    e3 = d - (d.sum(axis=1, keepdims=True) - d) / 2.0  # each over the other two
+    se3 = np.full((n_k, 3), 0.15e-3)
+    e4 = np.full((n_k, 4), np.nan)
+    se4 = np.full((n_k, 4), np.nan)
+    e4[:, three], se4[:, three] = e3, se3
+    rule = DeflationRule(cross_correlation=0.0, track_correlation=0.0, learn_s=40.0, radius_learn_s=20.0)
+    four = deflation_warnings(t, p, sd, np.ones((n_k, 4), bool), rule=rule,
+                              radius=RadiusEvidence(excess=e4, sigma=se4, gain_per_kpa=gain))  # fmt: skip
+    evidence3 = RadiusEvidence(excess=e3, sigma=se3, gain_per_kpa=gain[three])
+    ones3 = np.ones((n_k, 3), bool)
+    alone = deflation_warnings(t, p[:, three], sd[:, three], ones3, rule=rule, radius=evidence3)
+    assert np.isfinite(alone.fused_kpa[-1]).all() and np.isfinite(alone.relative_probability[-1]).all()
+    np.testing.assert_allclose(four.fused_kpa[:, three], alone.fused_kpa, rtol=1e-12)
+    np.testing.assert_allclose(four.fused_sigma_kpa[:, three], alone.fused_sigma_kpa, rtol=1e-12)
+    np.testing.assert_allclose(four.relative_probability[:, three], alone.relative_probability, rtol=1e-12)
+    np.testing.assert_array_equal(four.warning_time_s[three], alone.warning_time_s)
+    assert 100.0 < four.warning_time_s[0] < 140.0 and np.isnan(four.warning_time_s[1:]).all()
+    # the tyre without a radius: its own vibration estimate, never a relative-loss probability
+    np.testing.assert_allclose(four.fused_kpa[np.isfinite(four.fused_kpa[:, 2]), 2], 195.0)
+    assert np.isnan(four.relative_probability[:, 2]).all()
