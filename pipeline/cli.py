@@ -597,8 +597,9 @@ def monitor_command(
 
         rows = max(pq.ParquetFile(run).metadata.num_rows, 1)
         share = ", ".join(f"{c} {100.0 * n / rows:.0f} %" for c, n in silent.items() if n)
-        typer.echo(f"  radius analysis: a wheel's speed missing ({share} of the samples); the pressures "
-                   "with the radii are NaN there, the vibration's estimates and warnings stand")
+        typer.echo(f"  radius analysis: a wheel's speed missing ({share} of the samples); while a wheel's "
+                   "sensor is silent the radii compare the other wheels only, and its tyre keeps its "
+                   "vibration estimate")
 
 
 @app.command("input-estimate")
