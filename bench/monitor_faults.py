@@ -102,6 +102,16 @@ def main() -> None:
     fused_inside: dict = {}
     fused_here: dict = {}
     scratch = Path(tempfile.mkdtemp())
+
+    def score_file(case, faulty, t, truth):
+        """The run with a fault written into its file, through monitor_run (the pressure with the radii)."""
+        tmp = scratch / f"{case}.parquet"
+        pq.write_table(faulty, tmp)
+        at_30, held, with_radii = _fused_scores(tmp, t, truth)
+        fused_errors.setdefault(case, []).extend(at_30)
+        fused_inside.setdefault(case, []).extend(held)
+        fused_here.setdefault(case, []).extend(with_radii)
+
     for path in paths:
         arrow = pq.read_table(path)
         table = arrow.to_pandas()
@@ -130,20 +140,10 @@ def main() -> None:
                 for kind, values in (("sprung", s), ("unsprung", u)):
                     name = f"{corner}_accel_{kind}_mps2"
                     faulty = faulty.set_column(faulty.column_names.index(name), name, pa.array(values[:, i]))
-            tmp = scratch / f"{case}.parquet"
-            pq.write_table(faulty, tmp)
-            at_30, held, with_radii = _fused_scores(tmp, t, truth)
-            fused_errors.setdefault(case, []).extend(at_30)
-            fused_inside.setdefault(case, []).extend(held)
-            fused_here.setdefault(case, []).extend(with_radii)
-        for case, name in FILE_FAULTS.items():  # the body's sensors: the radius analysis alone reads them
+            score_file(case, faulty, t, truth)
+        for case, name in FILE_FAULTS.items():  # sensors the radius analysis alone reads
             faulty = arrow.set_column(arrow.column_names.index(name), name, pa.array(np.full(len(t), np.nan)))
-            tmp = scratch / f"{case}.parquet"
-            pq.write_table(faulty, tmp)
-            at_30, held, with_radii = _fused_scores(tmp, t, truth)
-            fused_errors.setdefault(case, []).extend(at_30)
-            fused_inside.setdefault(case, []).extend(held)
-            fused_here.setdefault(case, []).extend(with_radii)
+            score_file(case, faulty, t, truth)
     clean = np.array(errors["clean"])
     fused_clean = np.array(fused_errors["clean"])
     result = {}
