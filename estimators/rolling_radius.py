@@ -46,9 +46,9 @@ off (the accelerometer reads the body's roll, v is the wheels' speed at the nomi
 a block counts only while its mean |a_y| stays within ``max_lat_accel_no_yaw_mps2`` (0.5 m/s²: the
 turn's correction of the excess is then ≤ 3 ‰ at 58 km/h, its error ≤ 0.2 ‰). A wheel-speed
 sensor that reads nothing (NaN or ≤ 0) over a whole block while the other wheels turn is taken for
-dead: from the next block the analysis runs over the other wheels (v from their mean, each excess
+dead: that block and those after it are analysed over the other wheels (v from their mean, each excess
 over the others read, the dead wheel's NaN), every memory starting afresh (an excess over three
-wheels is another quantity than one over two); the sensor is taken back after a block where it read
+wheels is another quantity than one over four); the sensor is taken back with a block where it read
 on every sample the others did. Its silent samples are counted (:attr:`RollingRadius.silent_wheel_samples`).
 Each wheel's estimate is the mean of its recent blocks — since the last
 change, at most ``memory_blocks`` — with
@@ -456,7 +456,7 @@ class RollingRadius:
     def silent_wheel_samples(self) -> np.ndarray:
         """Per wheel (C,), the samples since the last reset where its speed was missing (NaN) or not
         positive while another wheel's was: a gap or a dead wheel-speed sensor. Such a sample does not
-        count for any wheel (every excess needs all C speeds), so a dead sensor stops the analysis."""
+        count; over a whole block the wheel is left out and the others analysed without it (:attr:`alive`)."""
         return self._s.silent.copy()
 
     @property
