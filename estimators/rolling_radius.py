@@ -387,9 +387,8 @@ class RollingRadius:
             raise InputError(f"t_s must continue the stream: got {t[0]} s after {s.last_t} s")
         others[0], others[1], others[2], guessed = self._body_motion(t, w, *others)
         reads = np.isfinite(w) & (w > 0.0)
-        turning = reads.any(axis=1)
-        if not reads[turning].all():  # a wheel reading nothing (NaN or ≤ 0) while another turns: counted
-            s.silent += np.sum(~reads & turning[:, None], axis=0)
+        if not reads.all():  # a wheel reading nothing (NaN or ≤ 0) while another turns: counted
+            s.silent += np.sum(~reads & reads.any(axis=1, keepdims=True), axis=0)
         grounded = np.ones(t.size, dtype=bool)
         if load_share is not None:  # a wheel off the ground does not roll on its radius
             grounded = ~np.any(load_share < self.config.min_load_share, axis=1)  # NaN < x is False
@@ -541,6 +540,8 @@ class RollingRadius:
         wheel's memory starts afresh (an excess over other wheels is another quantity)."""
         s = self._s
         reads = np.isfinite(w) & (w > 0.0)
+        if s.alive.all() and reads.all():  # every wheel read throughout: nothing to change
+            return
         turning = reads.any(axis=1)
         if turning.sum() < self.config.min_valid_share * self.block:
             return
