@@ -271,7 +271,7 @@ def _fuse_radius(p, sd, rho, ref, radius: RadiusEvidence, k: int, calibration, r
     e0, cov0, read = calibration
     first = np.flatnonzero(read)[:-1]  # any m − 1 of the m wheels' excesses hold all their information
     h = excess_operator(n_c, read) * np.asarray(radius.gain_per_kpa, dtype=float)[None, :]
-    y = np.nan_to_num(radius.excess[k] - e0)
+    y = radius.excess[k] - e0  # NaN for a wheel not read: not among `first`
     r = excess_cov(wheel_sd(radius.sigma[k], int(read.sum())), read) + cov0
     h, y, r = h[first], y[first], r[np.ix_(first, first)]
     info_v = np.linalg.inv(rho * (np.outer(sd, sd) + np.outer(ref_sd, ref_sd)))

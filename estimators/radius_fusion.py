@@ -219,7 +219,7 @@ def fuse_with_radii(
     for alive in np.unique(read[ok], axis=0):  # one batch per set of wheels read
         rows = ok & np.all(read == alive, axis=1)
         first = np.flatnonzero(alive)[:-1]  # any m − 1 of the m excesses hold all their information
-        p_o, sd_o, e_o, se_o = p[rows], sd[rows], e[rows][:, first], np.nan_to_num(se[rows])
+        p_o, sd_o, e_o, se_o = p[rows], sd[rows], e[rows][:, first], se[rows]
         prior_info = np.linalg.inv(rho * (sd_o[:, :, None] * sd_o[:, None, :]))
         a = excess_operator(n_c, alive)[first]
         own = np.sqrt(wheel_sd(se_o, int(alive.sum())) ** 2 + (1e-3 * spread_permille) ** 2)
@@ -300,16 +300,17 @@ def vibration_lag_kpa(
         out += np.abs(now) / g[None, :]
     if trend is not None:
         # a first-order lag trails a ramp of rate r by r τ; once the ramp ends, that lag decays as e^(−t/τ)
-        # (NaN for a wheel without an excess: a dead sensor's, over which the others' are not taken)
-        rate = np.where(np.isfinite(e), np.nan_to_num(np.asarray(trend, dtype=float)), np.nan)
+        raw = np.nan_to_num(np.asarray(trend, dtype=float))
+        # the wheels' rates from it: NaN for a wheel without an excess (a dead sensor's), left out
+        rate = np.where(np.isfinite(e), raw, np.nan)
         # the lag the last ramp up to each block leaves, and when it was set (its last block)
-        moving = np.any(np.nan_to_num(rate) != 0.0, axis=1)
+        moving = np.any(raw != 0.0, axis=1)
         last = np.maximum.accumulate(np.where(moving, np.arange(t_b.size), -1))
         ramp = np.where((last >= 0)[:, None], tau_s * _wheel_steps_kpa(rate[np.maximum(last, 0)], g), 0.0)
         since = np.where(last >= 0, t_b[np.maximum(last, 0)], -np.inf)
         now = np.maximum(at, 0)
         decay = np.where(at >= 0, np.exp(-np.maximum(t_r - since[now], 0.0) / tau_s), 0.0)
-        active = (at >= 0) & np.any(np.nan_to_num(rate[now]) != 0.0, axis=1)
+        active = (at >= 0) & moving[now]
         out += ramp[now] * np.where(active, 1.0, decay)[:, None]
     return out
 
