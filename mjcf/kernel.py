@@ -19,7 +19,8 @@ cached MjData views: per-step numpy calls would cost far more than the physics
 - ``ctrl``: Ackermann steering angles from one road-wheel angle (lane keeping by
   pure pursuit, a circle, a tabulated path y(x), or an open-loop series), each front knuckle's
   plus its lateral-force compliance steer (this step's side force) and bump steer (toe-out in
-  bump), and drive/brake torque from a PI speed controller; the rear tyres' compliance
+  bump), and drive/brake torque from a PI speed controller (brakes as friction: they hold a
+  stopped wheel, never turn it backward, :func:`_brake_or_drive`); the rear tyres' compliance
   toe (the previous step's side force, kept in the state) turns their force frame;
 - one row of the log per step (:data:`LOG_COLUMNS`).
 
@@ -238,6 +239,7 @@ VEHICLE_BLOCKS = (
     ("path_understeer", 1),
     ("cog_height", 1),
     ("contact_native", 1),
+    ("spin_inertia", 1),
 )
 """Blocks of the packed vehicle and driver parameters (:func:`pack_vehicle`), SI units."""
 VEHICLE, N_VEHICLE = _layout("VehicleSlots", VEHICLE_BLOCKS)
@@ -259,6 +261,7 @@ V_ENV_HALF, V_ENV_N = VEHICLE.env_half, VEHICLE.env_n
 V_DRAG = VEHICLE.drag
 V_KP_SPEED, V_KI_SPEED = VEHICLE.kp_speed, VEHICLE.ki_speed
 V_MAX_DRIVE, V_MAX_BRAKE = VEHICLE.max_drive, VEHICLE.max_brake
+V_SPIN_INERTIA = VEHICLE.spin_inertia
 V_PREVIEW_T, V_PREVIEW_MIN = VEHICLE.preview_t, VEHICLE.preview_min
 V_PATH_UNDERSTEER = VEHICLE.path_understeer
 V_COG_HEIGHT = VEHICLE.cog_height
@@ -373,6 +376,7 @@ def pack_vehicle(vm) -> np.ndarray:
     out[V_PATH_UNDERSTEER] = d.path_understeer
     out[V_COG_HEIGHT] = c.cog_height
     out[V_CONTACT_NATIVE] = 1.0 if vm.contact == "native" else 0.0
+    out[V_SPIN_INERTIA] = v.wheel.spin_inertia
     return out
 
 
@@ -463,6 +467,27 @@ def _spring(i, s, vp):
 
 
 @cached_njit
+def _brake_or_drive(torque, omega, spin_inertia, dt):
+    """The torque on a wheel's spin joint, N m, from the speed controller's `torque` (N m; < 0 brakes).
+
+    A drive torque (≥ 0) is applied as it is. A brake is friction between disc and pads: it opposes
+    the wheel's spin `omega` (rad/s) with up to ``|torque|`` and never drives the wheel the other
+    way. Near standstill it takes only what stops the wheel within this step,
+    ``spin_inertia · |omega| / dt`` (the wheel's inertia alone, kg m², the least it could be: so it
+    cannot overshoot), which holds a stopped car instead of reversing it (as a signed torque did: the
+    SUV braked to rest from 80 km/h rolled back 1.5 m at up to 0.64 m/s). Above
+    ``|torque| · dt / spin_inertia`` (about 2 rad/s, 0.8 m/s, at full braking) a brake torque is applied
+    exactly as asked.
+    """
+    if torque >= 0.0:
+        return torque
+    hold = spin_inertia * abs(omega) / dt
+    if omega >= 0.0:
+        return max(torque, -hold)
+    return min(-torque, hold)
+
+
+@cached_njit
 def step_kernel(
     k,
     dt,
@@ -523,7 +548,8 @@ def step_kernel(
         per_wheel = min(max(per_wheel, -vp[V_MAX_BRAKE]), vp[V_MAX_DRIVE])
     state[S_INTEGRAL] = integral
     for i in range(4):
-        ctrl[ids[I_DRIVE_ACT + i]] = per_wheel
+        omega = qvel[ids[I_SPIN_DOF + i]]
+        ctrl[ids[I_DRIVE_ACT + i]] = _brake_or_drive(per_wheel, omega, vp[V_SPIN_INERTIA], dt)
 
     # ---- driver: steering (road-wheel angle of the bicycle model) ----
     wb = vp[V_WHEELBASE]

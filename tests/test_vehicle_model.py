@@ -238,6 +238,25 @@ def test_straight_run_holds_speed_and_lane():
     assert np.abs(table.y_m).max() < 0.3
 
 
+def test_brakes_hold_a_stopped_car_instead_of_reversing_it():
+    """Braked to rest from 60 km/h and held at 0: brakes are friction, so the car stops and stays
+    (before, the speed controller's signed brake torque rolled it back 1.5 m at up to 0.64 m/s);
+    at rest on a level road the tyres' longitudinal forces cancel."""
+    scenario = parse_scenario(
+        {"duration_s": 16.0, "speed_kmh": [[0.0, 60.0], [4.0, 60.0], [9.0, 0.0], [16.0, 0.0]], "seed": 5,
+         "road": "flat", "noise": QUIET}
+    )  # fmt: skip
+    table = simulate(scenario).table
+    t, v, x = table.t_s.to_numpy(), table.speed_mps.to_numpy(), table.x_m.to_numpy()
+    assert v[t < 8.0].min() > 1.0  # still braking
+    assert v.min() > -0.05
+    held = t >= 11.0
+    assert np.ptp(x[held]) < 0.02
+    assert np.abs(table.loc[held, [f"{c}_wheel_speed_radps" for c in CORNERS]].to_numpy()).max() < 0.2
+    fx = table.loc[held, [f"{c}_tire_fx_n" for c in CORNERS]].to_numpy().sum(axis=1)
+    assert np.abs(fx).max() < 50.0  # N, against 20 kN of weight
+
+
 def test_same_scenario_same_bytes(tmp_path):
     scenario = parse_scenario(
         {
