@@ -45,7 +45,8 @@ exactly its speed change over its duration); a missing yaw rate is taken as a_y/
 off (the accelerometer reads the body's roll, v is the wheels' speed at the nominal radius), so such
 a block counts only while its mean |a_y| stays within ``max_lat_accel_no_yaw_mps2`` (0.5 m/s²: the
 turn's correction of the excess is then ≤ 3 ‰ at 58 km/h, its error ≤ 0.2 ‰). A wheel-speed
-sensor that reads nothing (NaN or ≤ 0) over a whole block while the other wheels turn is taken for
+sensor that reads nothing (NaN or ≤ 0) over a whole block while the other wheels turn (one at
+least at ``TURNING_MPS``, 1 m/s: a stopped car's wheels rock about zero) is taken for
 dead: that block and those after it are analysed over the other wheels (v from their mean, each excess
 over the others read, the dead wheel's NaN), every memory starting afresh (an excess over three
 wheels is another quantity than one over four); the sensor is taken back with a block where it read
@@ -104,7 +105,7 @@ import numpy.typing as npt
 from suvtwin.errors import InputError
 from suvtwin.jit import cached_njit
 
-__all__ = ["RadiusConfig", "RadiusUpdate", "RollingRadius", "excess_of", "load_share"]
+__all__ = ["TURNING_MPS", "RadiusConfig", "RadiusUpdate", "RollingRadius", "excess_of", "load_share"]
 
 
 @dataclass(frozen=True)
@@ -255,6 +256,12 @@ def load_share(
             + np.asarray(unsprung_mass_kg, dtype=float) * np.asarray(accel_unsprung_mps2, dtype=float)) / w
 
 
+TURNING_MPS = 1.0
+"""Slowest wheel speed, at the nominal radius (m/s), at which the car counts as moving for the
+wheel-speed sensors' check: a wheel that reads nothing while another turns at least this fast is
+silent (a gap or a dead sensor); below it the wheels of a stopped car rock about zero."""
+
+
 def excess_of(log_radius: npt.ArrayLike) -> np.ndarray:
     r"""Each wheel's excess over the others' mean along the last axis of `log_radius` (..., C):
     :math:`e_i = \delta_i - \frac{1}{C-1}\sum_{j\ne i}\delta_j`."""
@@ -388,7 +395,7 @@ class RollingRadius:
         others[0], others[1], others[2], guessed = self._body_motion(t, w, *others)
         reads = np.isfinite(w) & (w > 0.0)
         if not reads.all():  # a wheel reading nothing (NaN or ≤ 0) while another turns: counted
-            s.silent += np.sum(~reads & reads.any(axis=1, keepdims=True), axis=0)
+            s.silent += np.sum(~reads & self._turning(w, reads)[:, None], axis=0)
         grounded = np.ones(t.size, dtype=bool)
         if load_share is not None:  # a wheel off the ground does not roll on its radius
             grounded = ~np.any(load_share < self.config.min_load_share, axis=1)  # NaN < x is False
@@ -532,9 +539,15 @@ class RollingRadius:
             trend=slope[None],
         )  # fmt: skip
 
+    def _turning(self, w: np.ndarray, reads: np.ndarray) -> np.ndarray:
+        """Per sample (n,), whether some wheel turns: reads (`reads`, (n, C)) at least
+        :data:`TURNING_MPS` at the nominal radius. Below it a stopped car's wheels rock about zero
+        (the brakes' hold, the suspension settling): a wheel reading 0 or less then is not silent."""
+        return np.any(np.where(reads, w, 0.0) >= TURNING_MPS / self.radius, axis=1)
+
     def _check_wheels(self, w: np.ndarray) -> None:
         """Which wheels the block `w` (n, C) of wheel speeds is analysed over: a wheel read now that
-        read nothing (NaN or ≤ 0) over the whole block while the others turned (on at least
+        read nothing (NaN or ≤ 0) over the whole block while the others turned (:meth:`_turning`, on at least
         ``min_valid_share`` of its samples) is left out, and one left out that read on every sample
         where another turned is taken back; at least two wheels stay. Where the set changes, every
         wheel's memory starts afresh (an excess over other wheels is another quantity)."""
@@ -542,7 +555,7 @@ class RollingRadius:
         reads = np.isfinite(w) & (w > 0.0)
         if s.alive.all() and reads.all():  # every wheel read throughout: nothing to change
             return
-        turning = reads.any(axis=1)
+        turning = self._turning(w, reads)
         if turning.sum() < self.config.min_valid_share * self.block:
             return
         alive = s.alive.copy()

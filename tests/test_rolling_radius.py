@@ -526,3 +526,20 @@ def test_a_dead_wheel_speed_sensor_leaves_the_analysis_on_the_other_three_and_is
         assert ra.alive.all() and np.isfinite(rows.excess[-1]).all()
         np.testing.assert_allclose(rows.excess[-1], excess_of(np.log(radii[-1])), atol=3e-4)
         assert ra.silent_wheel_samples.tolist() == [0, 0, 0, 6000]
+
+
+def test_a_stopped_car_s_wheels_rocking_about_zero_are_not_silent_sensors():
+    # At rest the wheels rock about zero (the brakes' hold, the suspension settling): a wheel reading
+    # -0.01 rad/s while another reads +0.01 is not a dead sensor. Only a wheel that reads nothing
+    # while another turns at TURNING_MPS or faster counts, and takes the analysis down to three wheels.
+    n = 6000  # 60 s at 100 Hz: stopped for 30 s, then 20 m/s with the rear right's sensor dead
+    rocking = 0.01 * np.random.default_rng(7).standard_normal((n // 2, 4))
+    moving = _wheel_speeds(np.tile(R0 * np.ones(4), (n // 2, 1)), np.full(n // 2, 20.0), np.zeros(n // 2))
+    moving[:, 3] = np.nan
+    t, zero = np.arange(n) * 0.01, np.zeros(n)
+    ra = RollingRadius(POS, 0.01, R0)
+    ra.update(t[: n // 2], rocking, zero[: n // 2], zero[: n // 2], zero[: n // 2])
+    assert ra.silent_wheel_samples.tolist() == [0, 0, 0, 0] and ra.alive.all()
+    ra.update(t[n // 2 :], moving, zero[n // 2 :], zero[n // 2 :], zero[n // 2 :])
+    assert ra.silent_wheel_samples.tolist() == [0, 0, 0, n // 2]
+    assert ra.alive.tolist() == [True, True, True, False]
