@@ -18,7 +18,10 @@ as the radius analysis reads it from the wheel speeds
   dynamic mean; ln R_e is concave in F_z);
 - (d) as (a), with the samples left out where a wheel carries under ``min_load_share`` of its static
   load by its two accelerometers (:func:`suvtwin.pipeline.monitoring.tyre_load_share`), as the
-  radius analysis does: the wheels off the ground.
+  radius analysis does: the wheels off the ground;
+- (e) against MF-Tyre's radius at the wheels' STATIC loads (what the monitor's fusion assumes), split
+  into the slip's part (b's correction) and the part of the load the car's motion moves between
+  the wheels (drag and pitch: (a)'s reference less (e)'s).
 
 Printed: the RMS of each error (‰) by the block's largest per-sample scatter of the wheels' excess
 (‰, the analysis's roughness measure; its ``max_scatter_permille`` skips blocks beyond 10) and by
@@ -28,8 +31,10 @@ stiffness, which varies with the load) could remove, (c) whether the radius's ow
 explains it, (d) what is left with the measured gate. Blocks with under half their samples
 counted are left out, and of (d) those where under ``RadiusConfig.min_valid_share`` pass the gate
 (``blocks_gated``), as the analysis skips them; ``gated_by_counted_share`` gives (d) by the share
-of the block's samples the gate keeps. ``--set``: another cached set's runs (``warning``, ``drop``,
-``slow_leak``; the truth is each block's mean pressure, so the changing sets are scored too).
+of the block's samples the gate keeps; ``smooth_by_speed`` the mean of (e), its slip part and its
+load part per wheel (‰) over the smooth blocks (sample scatter under 4 ‰) by speed. ``--set``:
+another cached set's runs (``warning``, ``drop``, ``slow_leak``; the truth is each block's mean
+pressure, so the changing sets are scored too).
 """
 
 from __future__ import annotations
@@ -44,13 +49,14 @@ import pyarrow.parquet as pq
 from suvtwin.estimators.rolling_radius import RadiusConfig, RollingRadius, excess_of
 from suvtwin.mjcf.tire import effective_rolling_radius, load_tire
 from suvtwin.mjcf.vehicle import CORNERS, load_vehicle
-from suvtwin.pipeline.estimation import run_loads
+from suvtwin.pipeline.estimation import run_loads, static_wheel_loads
 from suvtwin.pipeline.monitor_scenarios import scenario_set, simulate_cached
 from suvtwin.pipeline.monitoring import tyre_load_share, wheel_positions
 
 BLOCK_S, SKIP_S = 4.0, 8.0
 SCATTER_EDGES = (0.0, 2.0, 4.0, 7.0, 10.0, 20.0, np.inf)
 COUNTED_EDGES = (0.05, 0.15, 0.25, 0.35, 0.5, 0.75, 1.01)
+SPEED_EDGES = (10.0, 15.0, 20.0, 25.0, 30.0, 35.0)
 
 
 def block_errors(path: Path, tire) -> dict[str, np.ndarray]:
@@ -59,7 +65,7 @@ def block_errors(path: Path, tire) -> dict[str, np.ndarray]:
     largest sample scatter (B,) and the share of samples with a wheel off the ground (B,)."""
     names = ("wheel_speed_radps", "tire_fz_n", "pressure_kpa", "tire_slip_ratio", "accel_sprung_mps2",
              "accel_unsprung_mps2")  # fmt: skip
-    columns = ["t_s", "yaw_rate_radps"] + [f"{c}_{k}" for c in CORNERS for k in names]
+    columns = ["t_s", "yaw_rate_radps", "speed_mps"] + [f"{c}_{k}" for c in CORNERS for k in names]
     tab = pq.read_table(path, columns=columns)
     col = {k: tab[k].to_numpy() for k in columns}
     vehicle = load_vehicle()
@@ -79,8 +85,10 @@ def block_errors(path: Path, tire) -> dict[str, np.ndarray]:
     p_pa = 1e3 * np.stack([col[f"{c}_pressure_kpa"] for c in CORNERS], axis=1)
     kappa = np.stack([col[f"{c}_tire_slip_ratio"] for c in CORNERS], axis=1)
     tp = tire.to_array()
+    static_fz = static_wheel_loads(loads, vehicle=vehicle)
     n = int(round(BLOCK_S / dt))
-    out: dict[str, list] = {"a": [], "b": [], "c": [], "d": [], "scatter": [], "airborne": [], "counted": []}
+    out: dict[str, list] = {"a": [], "b": [], "c": [], "d": [], "scatter": [], "airborne": [], "counted": [],
+                            "speed": [], "static": [], "slip": [], "load": []}  # fmt: skip
     for start in range(int(round(SKIP_S / dt)), t.size - n + 1, n):
         s = slice(start, start + n)
         if ok[s].mean() < 0.5:
@@ -94,6 +102,15 @@ def block_errors(path: Path, tire) -> dict[str, np.ndarray]:
                        for fr, pr in zip(fz[sub], p_pa[sub], strict=True)], axis=0)  # fmt: skip
         err_a = meas - excess_of(static)
         out["a"].append(err_a)
+        # (e) against MF-Tyre at the static loads (what the monitor's fusion assumes), split into the
+        # slip's part and the part of the load the car's motion moves between the wheels (drag, pitch)
+        at_static = excess_of(
+            np.log([effective_rolling_radius(f, q, tp) for f, q in zip(static_fz, mean_p, strict=True)])
+        )
+        out["static"].append(meas - at_static)
+        out["slip"].append(-excess_of(np.log1p(kappa[s].mean(axis=0))))
+        out["load"].append(excess_of(static) - at_static)
+        out["speed"].append(float(np.mean(col["speed_mps"][s])))
         # ω R_e = v (1 + κ): −ln ω = ln R_e − ln v − ln(1 + κ), so the slip moves the excess by −excess(κ)
         out["b"].append(err_a + excess_of(np.log1p(kappa[s].mean(axis=0))))
         out["c"].append(meas - excess_of(dyn))
@@ -121,6 +138,20 @@ def _summary(blocks: dict[str, np.ndarray], mask: np.ndarray) -> dict:
     }
 
 
+def _by_speed(blocks: dict[str, np.ndarray], scatter_permille: np.ndarray) -> dict:
+    """Smooth blocks (wheels' sample scatter under 4 ‰) by mean speed: per wheel (fl, fr, rl, rr) the
+    mean error (e) against MF-Tyre at the static loads, its slip part and its load-transfer part, ‰."""
+    out = {}
+    for lo, hi in zip(SPEED_EDGES[:-1], SPEED_EDGES[1:], strict=True):
+        sel = (scatter_permille < 4.0) & (blocks["speed"] >= lo) & (blocks["speed"] < hi)
+        out[f"{lo:g}-{hi:g} m/s"] = {
+            "blocks": int(sel.sum()),
+            **{k: [round(float(x), 3) for x in 1e3 * blocks[k][sel].mean(axis=0)] if sel.any() else None
+               for k in ("static", "slip", "load")},  # fmt: skip
+        }
+    return out
+
+
 def main(argv: list[str] | None = None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--set", default="constant", choices=["constant", "slow_leak", "drop", "warning"])
@@ -132,7 +163,7 @@ def main(argv: list[str] | None = None) -> dict:
     paths, _ = simulate_cached(runs, runs_dir, jobs=1)
     tire = load_tire(None)
     per_run = [(r.info["road_class"], block_errors(p, tire)) for r, p in zip(runs, paths, strict=True) if p]
-    keys = ("a", "b", "c", "d", "scatter", "airborne", "counted")
+    keys = ("a", "b", "c", "d", "scatter", "airborne", "counted", "speed", "static", "slip", "load")
     blocks = {k: np.concatenate([b[k] for _, b in per_run]) for k in keys}
     road = np.concatenate([[cls] * len(b["scatter"]) for cls, b in per_run])
     scatter = 1e3 * blocks["scatter"]
@@ -150,6 +181,7 @@ def main(argv: list[str] | None = None) -> dict:
         "all": _summary(blocks, np.ones(scatter.size, bool)),
         "by_scatter_permille": by_scatter,
         "by_class": {c: _summary(blocks, road == c) for c in sorted(set(road))},
+        "smooth_by_speed": _by_speed(blocks, scatter),
         "gated_by_counted_share": {
             f"{lo:g}-{hi:g}": {
                 "blocks": int(sel.sum()),
