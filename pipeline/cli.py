@@ -581,7 +581,7 @@ def monitor_command(
         warned = result.metadata["warnings"][c]
         now = "no estimate yet" if last is None else (
             f"{last[f'{c}_pressure_hat_kpa']:.1f} ± {last[f'{c}_pressure_sigma_kpa']:.1f} kPa"
-            + ("" if last[f"{c}_observable"] else " (not observable)")
+            + ("" if last[f"{c}_observable"] else f" (not observable{_skipped(result.metadata, c)})")
             + (f", with the radii {last[f'{c}_fused_pressure_kpa']:.1f} ± {last[f'{c}_fused_sigma_kpa']:.1f}"
                if math.isfinite(last.get(f"{c}_fused_pressure_kpa", math.nan)) else "")
         )  # fmt: skip
@@ -600,6 +600,14 @@ def monitor_command(
         typer.echo(f"  radius analysis: a wheel's speed missing ({share} of the samples); while a wheel's "
                    "sensor is silent the radii compare the other wheels only, and its tyre keeps its "
                    "vibration estimate")
+
+
+def _skipped(metadata: dict, corner: str) -> str:
+    """``"; windows: 5 used, 2 rough"``: what became of a tyre's windows (the monitor's
+    ``segment_status``), for the console's "not observable"."""
+    counts = {r: n.get(corner, 0) for r, n in (metadata.get("segment_status") or {}).items()}
+    parts = [f"{n} {r.replace('_', ' ')}" for r, n in sorted(counts.items(), key=lambda x: -x[1]) if n]
+    return f"; windows: {', '.join(parts)}" if parts else ""
 
 
 @app.command("input-estimate")

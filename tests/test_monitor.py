@@ -132,6 +132,18 @@ def test_the_default_pressure_prior_is_flat_over_the_range():
     assert leaning.prior_sigma_pa[0] == pytest.approx(1e3 * cut.std(), rel=0.005)
 
 
+def test_no_road_signal_is_flagged_not_observable_not_read_as_soft_tyres():
+    # the accelerometers' white noise alone (a road with no roughness at all): the window likelihood's
+    # road level falls to its lower bound, where the model still predicts a wheel-hop peak well above
+    # the noise, and the softest tyres fitted best (a MuJoCo run on a flat road read every tyre 80-87 kPa
+    # and warned all four); now each window is 'smooth' and the tyres stay at their prior
+    noise = np.random.default_rng(11).normal(0.0, MonitorConfig().sigma_accel, (2, 20000, 2))
+    out = _feed(TyreMonitor([QC] * 2, dt=DT), noise, 80 / 3.6, 5000)
+    assert np.all(out.status == SKIP_REASONS.index("smooth"))
+    assert not np.any(out.observable)
+    np.testing.assert_allclose(out.pressure_sigma_pa, _prior_sigma_pa(), rtol=0.02)
+
+
 def test_low_speed_is_flagged_not_observable(runs):
     # at 20 km/h the band 0.05-3 cycles/m ends at 16.7 Hz, short of 1.6 times the wheel hop (~12 Hz)
     out = _feed(TyreMonitor([QC] * 2, dt=DT), runs.acc[:2], 20 / 3.6, 5000)

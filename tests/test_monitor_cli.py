@@ -517,3 +517,19 @@ def test_a_dead_wheel_speed_sensor_leaves_the_radius_analysis_on_the_other_three
     # and on the clean run none is counted
     clean = json.loads(pq.read_table(tmp_path / "clean.parquet").schema.metadata[b"suvtwin.monitor"])
     assert clean["radius"]["silent_wheel_samples"] == {"fl": 0, "fr": 0, "rl": 0, "rr": 0}
+
+
+def test_a_road_with_no_roughness_is_not_read_as_four_soft_tyres(tmp_path, capsys):
+    # on a flat road the accelerometers hold their noise alone; the monitor read every tyre 80-87 kPa
+    # and warned all four at 12 s (P = 1.000) before its windows checked for a road signal
+    run = tmp_path / "flat.parquet"
+    scenario = tmp_path / "flat.yaml"
+    scenario.write_text("duration_s: 20\nseed: 3\nspeed_kmh: 80\nroad: flat\npressure_kpa: 230\n")
+    assert main(["simulate", "--scenario", str(scenario), "--out", str(run), "--no-progress"]) == 0
+    out = tmp_path / "monitor.parquet"
+    assert main(["monitor", str(run), "--out", str(out), "--placard", "230"]) == 0
+    frame = pq.read_table(out).to_pandas()
+    for c in ("fl", "fr", "rl", "rr"):
+        assert (frame[f"{c}_status"] == "smooth").all()
+        assert not frame[f"{c}_observable"].any() and not frame[f"{c}_warning"].any()
+    assert "windows: 5 smooth" in capsys.readouterr().out
