@@ -11,6 +11,8 @@ Each MuJoCo run is monitored clean and with one fault at a time, on all four cor
   cuts 29 % of its samples);
 - ``bias``: +2 m/s² offset on every accelerometer (a mounting or calibration error);
 - ``dead``: the rear-left wheel accelerometer silent (NaN) over the whole run;
+- ``disconnected``: the rear-left wheel accelerometer reading only white noise of the sensors'
+  0.5 m/s² (a loose connector or a sensor off its mount: no road signal, every sample plausible);
 - ``dead_yaw_rate``, ``dead_lat_accel``, ``dead_long_accel``: the body's yaw-rate sensor, lateral or
   longitudinal accelerometer silent over the whole run (only the radius analysis reads them: the
   ``fused`` numbers alone; the analysis takes the wheels' kinematics instead);
@@ -57,6 +59,9 @@ def _faults(acc_s: np.ndarray, acc_u: np.ndarray, t: np.ndarray) -> dict:
     u = acc_u.copy()
     u[:, 2] = np.nan
     cases["dead"] = (acc_s, u)
+    u = acc_u.copy()
+    u[:, 2] = np.random.default_rng(2026).normal(0.0, 0.5, t.size)  # the sensor's own noise, nothing else
+    cases["disconnected"] = (acc_s, u)
     return cases
 
 
