@@ -79,6 +79,10 @@ class LoadSpec(BaseModel):
 ISO3888_SECTIONS_M = (15.0, 30.0, 25.0, 25.0, 15.0, 15.0)
 """Lengths of the six sections of the ISO 3888-1:2018 double lane change, m: entry lane,
 lane change, offset lane, change back, exit lane (two sections of 15 m)."""
+WHEEL_MARGIN_M = 0.25
+"""How far beyond half its track a wheel may reach from the car's centre line, m: half a 235 mm tyre
+and about 0.1 m of the path driver's tracking error (the road strip's check,
+:meth:`Scenario._check_on_road`)."""
 ISO3888_OFFSET_M = 3.5
 """Lateral offset of the ISO 3888-1 offset lane (section 3), m."""
 
@@ -270,7 +274,35 @@ class Scenario(BaseModel):
                     )
         if not isinstance(self.speed_kmh, int | float) and self.speed_kmh[-1][0] > self.duration_s:
             raise ValueError("speed profile extends beyond duration_s")
+        self._check_on_road()
         return self
+
+    def _check_on_road(self) -> None:
+        """A road with segments is a straight strip, |y| ≤ ``HALF_WIDTH_Y`` (2 m) about the start
+        line (the heightfield; beyond it the road is its edge row extended, not the road asked for):
+        steering that would take a wheel off it is refused. A wheel reaches half the widest track
+        plus :data:`WHEEL_MARGIN_M` (half a tyre's width and the driver's tracking error) from the
+        car's centre line. ``series`` (open loop) cannot be checked before the run."""
+        if self.road == "flat" or self.steering.mode == "series":
+            return
+        from suvtwin.mjcf.builder import HALF_WIDTH_Y
+
+        chassis = load_vehicle(overrides=self.vehicle or None).chassis
+        room = HALF_WIDTH_Y - 0.5 * max(chassis.track_front, chassis.track_rear) - WHEEL_MARGIN_M
+        st = self.steering
+        if st.mode == "circle":
+            raise ValueError(
+                f"steering.mode 'circle' needs road: flat (a road with segments is a straight strip "
+                f"{2 * HALF_WIDTH_Y:g} m wide)"
+            )
+        path = st.reference_path()
+        widest = abs(st.lane_y_m) if path is None else float(np.max(np.abs(st.lane_y_m + path[1])))
+        if widest > room + 1e-9:
+            field = "steering.lane_y_m" if path is None else "steering.lane_y_m + path y"
+            raise ValueError(
+                f"{field} must stay within ±{room:.2f} m on a road with segments (a straight strip "
+                f"{2 * HALF_WIDTH_Y:g} m wide), got {widest:.2f} m"
+            )
 
     # ---- derived quantities (SI) ----
     @property

@@ -319,3 +319,23 @@ def test_without_compliance_the_effective_axle_is_the_tyre():
         assert stiffness(effective.nominal[axle], loads[wheel]) == pytest.approx(
             stiffness(own.nominal, loads[wheel]), rel=0.08
         )
+
+
+@pytest.mark.parametrize(
+    ("steering", "message"),
+    [
+        ({"mode": "circle", "radius_m": 80.0}, "steering.mode 'circle' needs road: flat"),
+        ({"mode": "lane", "lane_y_m": 1.5}, "steering.lane_y_m must stay within ±0.93 m"),
+        ({"mode": "iso3888"}, "steering.lane_y_m + path y must stay within ±0.93 m"),
+    ],
+)
+def test_steering_that_leaves_a_rough_road_s_strip_is_refused(steering, message):
+    # a road with segments is a straight heightfield strip 4 m wide; beyond it the "road" would be its
+    # edge row extended (an 80 m circle on a class C road read the monitor's tyres 47-63 kPa low)
+    road = {"segments": [{"length_m": 300.0, "road_class": "C"}]}
+    with pytest.raises(InputError, match="steering") as info:
+        parse_scenario({"duration_s": 5.0, "road": road, "steering": steering})
+    assert message in str(info.value)
+    parse_scenario({"duration_s": 5.0, "road": "flat", "steering": steering})  # fine on a flat road
+    weave = {"mode": "path", "path": [[0.0, 0.0], [20.0, 0.7], [40.0, -0.7], [60.0, 0.0]]}
+    parse_scenario({"duration_s": 5.0, "road": road, "steering": weave})  # within the strip
