@@ -437,6 +437,11 @@ def simulate_command(
         f"wrote {out}: {result.n_samples} samples over {sc.duration_s:g} s "
         f"({sc.n_steps} steps in {wall:.2f} s, {sc.duration_s / wall:.0f}x real time)"
     )
+    off = result.metadata.get("off_road_share", 0.0)
+    if off > 0.0:
+        typer.echo(f"warning: a wheel was beyond the 4 m road strip on {100.0 * off:.1f} % of the samples; "
+                   "there the road under it is the strip's edge row extended, not the road asked for",
+                   err=True)  # fmt: skip
 
 
 @app.command("render")

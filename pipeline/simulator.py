@@ -278,6 +278,7 @@ def simulate(scenario: Scenario, *, progress: bool = False) -> SimResult:
     if bar is not None:
         bar.close()
     columns = _output_arrays(log[:: scenario.decimation], scenario)
+    off_road = off_road_share(columns, scenario)
     meta = {
         "scenario": scenario.model_dump(mode="json"),
         "road_seed": scenario.road_seed(),
@@ -286,8 +287,26 @@ def simulate(scenario: Scenario, *, progress: bool = False) -> SimResult:
         "versions": package_versions(("suvtwin", "mujoco", "numpy", "numba", "scipy", "pyarrow")),
         "wall_time_s": wall,
         "total_mass_kg": float(np.sum(model.body_mass)),
+        "off_road_share": off_road,
     }
     return SimResult(columns=columns, scenario=scenario, metadata=meta)
+
+
+def off_road_share(columns: dict[str, np.ndarray], scenario: Scenario) -> float:
+    """Share of the output samples with a wheel centre beyond the road strip (|y| > ``HALF_WIDTH_Y``,
+    2 m; 0 on a flat road, which is flat everywhere): a road with segments is a straight heightfield
+    strip, and beyond it the road under the wheel is the strip's edge row extended, not the road asked
+    for. Steering modes checked before the run (:meth:`~suvtwin.pipeline.scenario.Scenario._check_on_road`)
+    stay on it; an open-loop ``series`` may not. From the chassis position ``y_m`` and ``yaw_rad``
+    and the wheels' places on the chassis."""
+    if scenario.road == "flat":
+        return 0.0
+    c = load_vehicle(overrides=scenario.vehicle or None).chassis
+    x_w = np.array([c.a1, c.a1, -c.a2, -c.a2])
+    y_w = np.array([c.track_front, -c.track_front, c.track_rear, -c.track_rear]) / 2.0
+    yaw = columns["yaw_rad"][:, None]
+    y = columns["y_m"][:, None] + x_w * np.sin(yaw) + y_w * np.cos(yaw)
+    return float(np.mean(np.any(np.abs(y) > HALF_WIDTH_Y, axis=1)))
 
 
 def _output_arrays(log: np.ndarray, scenario: Scenario) -> dict[str, np.ndarray]:

@@ -228,3 +228,27 @@ def test_render_without_offscreen_gl_says_why_and_writes_nothing(tmp_path, capsy
     assert main(["render", str(run), "--out", str(video), "--width", "320", "--height", "192"]) == 1
     assert "OpenGL" in capsys.readouterr().err
     assert not video.exists() and not list(Path(tmp_path).glob(".run.mp4*"))
+
+
+def test_a_wheel_beyond_the_road_strip_is_measured_and_said(tmp_path, capsys):
+    # an open-loop steering series cannot be checked before the run: a steady 0.05 rad from 5 s on
+    # a rough road turns the car off the straight 4 m strip (a 57 m circle); the share of samples with
+    # a wheel centre beyond |y| = 2 m, from the chassis pose and the wheels' places, goes into the
+    # metadata and the console warns. A lane-kept run stays on it.
+    scenario = tmp_path / "s.yaml"
+    road = "road: {segments: [{length_m: 300, road_class: C}]}\n"
+    for steering, off in (("{mode: series, series: [[0, 0.0], [5, 0.0], [6, 0.05], [12, 0.05]]}", True),
+                          ("{mode: lane, lane_y_m: 0.5}", False)):  # fmt: skip
+        scenario.write_text(f"duration_s: 12\nseed: 5\nspeed_kmh: 60\n{road}steering: {steering}\n")
+        out = tmp_path / "run.parquet"
+        assert main(["simulate", "--scenario", str(scenario), "--out", str(out), "--no-progress"]) == 0
+        table, metadata = read_run(out)
+        share = metadata["off_road_share"]
+        t, y, yaw = table["t_s"].to_numpy(), table["y_m"].to_numpy(), table["yaw_rad"].to_numpy()
+        if off:
+            # every wheel is within 1.5 m of the chassis centre: all off beyond 3.5 m, none within 0.5 m
+            assert np.mean(np.abs(y) > 3.5) <= share <= np.mean(np.abs(y) > 0.5)
+            assert share > 0.2 and "beyond the 4 m road strip" in capsys.readouterr().err
+        else:
+            assert share == 0.0 and np.abs(y).max() < 0.7 and np.abs(yaw).max() < 0.05 and t[-1] > 11.9
+            assert "road strip" not in capsys.readouterr().err
