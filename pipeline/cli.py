@@ -596,6 +596,10 @@ def monitor_command(
                "radii against the others": ", its radius against the others')"}.get(warned.get("by"), ")")
         )  # fmt: skip
         typer.echo(f"  {c}: {now}{note}")
+    off = result.metadata.get("run_off_road_share") or 0.0
+    if off > 0.0:
+        typer.echo(f"  note: a wheel was beyond the simulated road strip on {100.0 * off:.1f} % of the "
+                   "run's samples (its off_road_share): there the road under it was not the road asked for")
     silent = (result.metadata.get("radius") or {}).get("silent_wheel_samples", {})
     if any(silent.values()):
         import pyarrow.parquet as pq

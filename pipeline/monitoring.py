@@ -460,6 +460,7 @@ def monitor_run(
     counts = monitor.counts
     metadata = {
         "run_file": str(path),
+        "run_off_road_share": meta.get("off_road_share"),  # wheels beyond the road strip (the simulator's)
         "corners": list(corners),
         "tire_file": tire_file,
         "load_kg": load,

@@ -249,6 +249,9 @@ def test_a_wheel_beyond_the_road_strip_is_measured_and_said(tmp_path, capsys):
             # every wheel is within 1.5 m of the chassis centre: all off beyond 3.5 m, none within 0.5 m
             assert np.mean(np.abs(y) > 3.5) <= share <= np.mean(np.abs(y) > 0.5)
             assert share > 0.2 and "beyond the 4 m road strip" in capsys.readouterr().err
+            # and the monitor, reading that run, says so beside its estimates
+            assert main(["monitor", str(out), "--out", str(tmp_path / "m.parquet"), "--placard", "230"]) == 0
+            assert f"beyond the simulated road strip on {100 * share:.1f} %" in capsys.readouterr().out
         else:
             assert share == 0.0 and np.abs(y).max() < 0.7 and np.abs(yaw).max() < 0.05 and t[-1] > 11.9
             assert "road strip" not in capsys.readouterr().err
