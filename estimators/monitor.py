@@ -205,6 +205,8 @@ check)."""
 
 _USED, _GAP, _CLIPPED, _IMPLAUSIBLE, _SPIKE, _SPEED, _LOW_SPEED, _ROUGH, _SMOOTH = range(len(SKIP_REASONS))
 _LEVEL_BOUNDS = (np.log(1e-8), np.log(1e-1))  # log Gd(n0), m³
+_FREQ_TOL = 1e-9  # relative tolerance of a Fourier frequency at a threshold (TyreMonitor.__init__)
+_GRAVITY = 9.81  # m/s²
 
 
 def _at_level_floor(ll: np.ndarray, lam: np.ndarray) -> np.ndarray:
@@ -214,8 +216,6 @@ def _at_level_floor(ll: np.ndarray, lam: np.ndarray) -> np.ndarray:
     flat_ll, flat_lam = ll.reshape(ll.shape[0], -1), lam.reshape(lam.shape[0], -1)
     best = flat_lam[np.arange(ll.shape[0]), np.argmax(flat_ll, axis=1)]
     return best <= _LEVEL_BOUNDS[0] + 1e-6
-_FREQ_TOL = 1e-9  # relative tolerance of a Fourier frequency at a threshold (TyreMonitor.__init__)
-_GRAVITY = 9.81  # m/s²
 
 
 @dataclass(frozen=True)

@@ -278,7 +278,7 @@ def simulate(scenario: Scenario, *, progress: bool = False) -> SimResult:
     if bar is not None:
         bar.close()
     columns = _output_arrays(log[:: scenario.decimation], scenario)
-    off_road = off_road_share(columns, scenario)
+    off_road = off_road_share(columns, scenario, vm.vehicle)
     meta = {
         "scenario": scenario.model_dump(mode="json"),
         "road_seed": scenario.road_seed(),
@@ -292,16 +292,16 @@ def simulate(scenario: Scenario, *, progress: bool = False) -> SimResult:
     return SimResult(columns=columns, scenario=scenario, metadata=meta)
 
 
-def off_road_share(columns: dict[str, np.ndarray], scenario: Scenario) -> float:
+def off_road_share(columns: dict[str, np.ndarray], scenario: Scenario, vehicle=None) -> float:
     """Share of the output samples with a wheel centre beyond the road strip (|y| > ``HALF_WIDTH_Y``,
     2 m; 0 on a flat road, which is flat everywhere): a road with segments is a straight heightfield
     strip, and beyond it the road under the wheel is the strip's edge row extended, not the road asked
     for. Steering modes checked before the run (:meth:`~suvtwin.pipeline.scenario.Scenario._check_on_road`)
     stay on it; an open-loop ``series`` may not. From the chassis position ``y_m`` and ``yaw_rad``
-    and the wheels' places on the chassis."""
+    and the wheels' places on the chassis (`vehicle`'s, default the scenario's)."""
     if scenario.road == "flat":
         return 0.0
-    c = load_vehicle(overrides=scenario.vehicle or None).chassis
+    c = (vehicle or load_vehicle(overrides=scenario.vehicle or None)).chassis
     x_w = np.array([c.a1, c.a1, -c.a2, -c.a2])
     y_w = np.array([c.track_front, -c.track_front, c.track_rear, -c.track_rear]) / 2.0
     yaw = columns["yaw_rad"][:, None]
