@@ -107,12 +107,13 @@ def block_errors(path: Path, tire) -> dict[str, np.ndarray]:
         at_static = excess_of(
             np.log([effective_rolling_radius(f, q, tp) for f, q in zip(static_fz, mean_p, strict=True)])
         )
+        # ω R_e = v (1 + κ): −ln ω = ln R_e − ln v − ln(1 + κ), so the slip moves the excess by −excess(κ)
+        slip = -excess_of(np.log1p(kappa[s].mean(axis=0)))
         out["static"].append(meas - at_static)
-        out["slip"].append(-excess_of(np.log1p(kappa[s].mean(axis=0))))
+        out["slip"].append(slip)
         out["load"].append(excess_of(static) - at_static)
         out["speed"].append(float(np.mean(col["speed_mps"][s])))
-        # ω R_e = v (1 + κ): −ln ω = ln R_e − ln v − ln(1 + κ), so the slip moves the excess by −excess(κ)
-        out["b"].append(err_a + excess_of(np.log1p(kappa[s].mean(axis=0))))
+        out["b"].append(err_a - slip)
         out["c"].append(meas - excess_of(dyn))
         gate = ok[s] & carried[s]
         nan = np.full(len(CORNERS), np.nan)

@@ -301,9 +301,7 @@ def off_road_share(columns: dict[str, np.ndarray], scenario: Scenario, vehicle=N
     and the wheels' places on the chassis (`vehicle`'s, default the scenario's)."""
     if scenario.road == "flat":
         return 0.0
-    c = (vehicle or load_vehicle(overrides=scenario.vehicle or None)).chassis
-    x_w = np.array([c.a1, c.a1, -c.a2, -c.a2])
-    y_w = np.array([c.track_front, -c.track_front, c.track_rear, -c.track_rear]) / 2.0
+    x_w, y_w = (vehicle or load_vehicle(overrides=scenario.vehicle or None)).corner_xy.T
     yaw = columns["yaw_rad"][:, None]
     y = columns["y_m"][:, None] + x_w * np.sin(yaw) + y_w * np.cos(yaw)
     return float(np.mean(np.any(np.abs(y) > HALF_WIDTH_Y, axis=1)))
