@@ -513,3 +513,27 @@ def test_learned_references_with_a_dead_wheel_speed_sensor_are_the_three_tyre_ca
     # the tyre without a radius: its own vibration estimate, never a relative-loss probability
     np.testing.assert_allclose(four.fused_kpa[np.isfinite(four.fused_kpa[:, 2]), 2], 195.0)
     assert np.isnan(four.relative_probability[:, 2]).all()
+
+
+@pytest.mark.parametrize("samples", [8000, 3000])
+def test_window_cross_spectra_are_scipys_linearly_detrended_periodograms(samples):
+    # a whole window (the line taken out after the transform) and a shorter tail (zero-padded to the
+    # window): scipy's periodogram and CSD with a linear detrend, rectangular window, on the same grid
+    from scipy.signal import csd, periodogram
+
+    mon = TyreMonitor([QC] * 2, dt=DT)
+    rng = np.random.default_rng(11)
+    ramp = np.linspace(0.0, 3.0, samples)[:, None]
+    a_s = rng.normal(size=(samples, 2)) + 9.81 + ramp  # an offset and a drift the detrend must remove
+    a_u = 4.0 * rng.normal(size=(samples, 2)) + 0.5 * a_s - 2.0 * ramp
+    spec = mon._cross_spectra(a_s, a_u)  # (C, bands, 3)
+    # scipy's one-sided spectra per Hz; the monitor scales by the samples it holds, zero-padded to a window
+    kw = dict(fs=1.0 / DT, window="boxcar", detrend="linear", nfft=mon.window, axis=0)
+    _, s11 = periodogram(a_s, **kw)
+    _, s22 = periodogram(a_u, **kw)
+    # S12 = X_s conj(X_u): scipy's csd(x, y) is conj(X) Y
+    f, s12 = csd(a_u, a_s, nperseg=samples, noverlap=0, **kw)
+    fine = np.stack([s11, s22, s12], axis=-1)[mon._f_index].transpose(1, 0, 2)  # (C, F, 3)
+    expected = np.add.reduceat(fine, mon._group_start, axis=1) / mon._group_size[:, None]
+    np.testing.assert_allclose(f[mon._f_index][0], 1.0 / (mon.window * DT))
+    np.testing.assert_allclose(spec, expected, rtol=1e-9, atol=1e-12 * np.abs(expected).max())
