@@ -13,6 +13,7 @@ Each MuJoCo run is monitored clean and with one fault at a time, on all four cor
 - ``dead``: the rear-left wheel accelerometer silent (NaN) over the whole run;
 - ``disconnected``: the rear-left wheel accelerometer reading only white noise of the sensors'
   0.5 m/s² (a loose connector or a sensor off its mount: no road signal, every sample plausible);
+- ``disconnected_body``: the same for the rear-left body (sprung) accelerometer;
 - ``dead_yaw_rate``, ``dead_lat_accel``, ``dead_long_accel``: the body's yaw-rate sensor, lateral or
   longitudinal accelerometer silent over the whole run (only the radius analysis reads them: the
   ``fused`` numbers alone; the analysis takes the wheels' kinematics instead);
@@ -20,9 +21,9 @@ Each MuJoCo run is monitored clean and with one fault at a time, on all four cor
   analysis stops: the ``fused`` numbers are the vibration's where there is no pressure with the
   radii, as a user reads them; ``with_radii_share`` says how often there was one).
 
-Printed per case: the error at 30 s (mean, std, over runs × tyres, kPa), the ±2σ coverage after
-2 s, the windows used and skipped by reason, and the difference of the error from the clean case;
-and the same for the pressure with the wheels' radii (``fused``: the run file with the faulty
+Printed per case: the error at 30 s (mean, std, over runs × tyres, and the mean per tyre, kPa), the
+±2σ coverage after 2 s, the windows used and skipped by reason, and the difference of the error from
+the clean case; and the same for the pressure with the wheels' radii (``fused``: the run file with the faulty
 accelerometers through :func:`suvtwin.pipeline.monitoring.monitor_run`, whose radius analysis takes
 each sample's tyre loads from them).
 """
@@ -62,6 +63,9 @@ def _faults(acc_s: np.ndarray, acc_u: np.ndarray, t: np.ndarray) -> dict:
     u = acc_u.copy()
     u[:, 2] = np.random.default_rng(2026).normal(0.0, 0.5, t.size)  # the sensor's own noise, nothing else
     cases["disconnected"] = (acc_s, u)
+    s = acc_s.copy()
+    s[:, 2] = np.random.default_rng(2027).normal(0.0, 0.5, t.size)
+    cases["disconnected_body"] = (s, acc_u)
     return cases
 
 
@@ -88,6 +92,12 @@ def _fused_scores(path, t, truth):
     at_30 = err[k].tolist() if k < len(res) else []
     after = res["t_s"].to_numpy() > 2.0
     return at_30, (np.abs(err[after]) <= 2 * fsig[after]).ravel().tolist(), here[after].ravel().tolist()
+
+
+def _by_tyre(errors: np.ndarray) -> dict:
+    """The mean error per tyre of errors listed run by run, tyre by tyre (kPa)."""
+    per = np.asarray(errors).reshape(-1, len(CORNERS)).mean(axis=0)
+    return {c: round(float(x), 1) for c, x in zip(CORNERS, per, strict=True)}
 
 
 def main() -> None:
@@ -159,6 +169,7 @@ def main() -> None:
             result[case] = {
                 "error_30s_mean_kpa": round(float(e.mean()), 2),
                 "error_30s_std_kpa": round(float(e.std()), 2),
+                "error_30s_mean_by_tyre_kpa": _by_tyre(e),
                 "change_from_clean_rms_kpa": round(float(np.sqrt(np.mean((e - clean) ** 2))), 2),
                 "inside_2sigma_after_2s": round(float(np.mean(inside[case])), 3),
                 "windows": counts[case],
@@ -167,6 +178,7 @@ def main() -> None:
         result[case]["fused"] = {
             "error_30s_mean_kpa": round(float(f.mean()), 2),
             "error_30s_std_kpa": round(float(f.std()), 2),
+            "error_30s_mean_by_tyre_kpa": _by_tyre(f),
             "change_from_clean_rms_kpa": round(float(np.sqrt(np.mean((f - fused_clean) ** 2))), 2),
             "inside_2sigma_after_2s": round(float(np.mean(fused_inside[case])), 3),
             "with_radii_share": round(float(np.mean(fused_here[case])), 3),

@@ -144,6 +144,20 @@ def test_no_road_signal_is_flagged_not_observable_not_read_as_soft_tyres():
     np.testing.assert_allclose(out.pressure_sigma_pa, _prior_sigma_pa(), rtol=0.02)
 
 
+def test_a_sensor_reading_only_noise_beside_one_reading_the_road_is_silent(runs):
+    # corner 0's body accelerometer and corner 1's wheel accelerometer read their white noise alone (a
+    # loose connector), corner 2 is sound: the two faulty corners' windows are 'silent', never used
+    acc = runs.acc[:3].copy()
+    rng = np.random.default_rng(12)
+    acc[0, :, 0] = rng.normal(0.0, MonitorConfig().sigma_accel, acc.shape[1])
+    acc[1, :, 1] = rng.normal(0.0, MonitorConfig().sigma_accel, acc.shape[1])
+    out = _feed(TyreMonitor([QC] * 3, dt=DT), acc, SPEED_MPS, 5000)
+    silent = SKIP_REASONS.index("silent")
+    assert np.all(out.status[:, :2] == silent)
+    assert np.all(out.status[:, 2] == SKIP_REASONS.index("used"))
+    assert not np.any(out.observable[:, :2]) and out.observable[-1, 2]
+
+
 def test_low_speed_is_flagged_not_observable(runs):
     # at 20 km/h the band 0.05-3 cycles/m ends at 16.7 Hz, short of 1.6 times the wheel hop (~12 Hz)
     out = _feed(TyreMonitor([QC] * 2, dt=DT), runs.acc[:2], 20 / 3.6, 5000)
