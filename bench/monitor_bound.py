@@ -35,7 +35,7 @@ ISO 8608 road (class C centre, w = 2) driving the SUV's linear front-left corner
   independent (the coherence between corners dropped) but sharing the level (and slope).
 
 These bounds assume the model is exact; on the MuJoCo SUV the estimators stay above them
-(README, "Benchmarks").
+(docs/monitor.md, "Benchmarks").
 """
 
 from __future__ import annotations

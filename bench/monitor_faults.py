@@ -1,7 +1,8 @@
 """Sensor faults and the online monitor: what each fault costs in error, never a crash.
 
-Run: ``python bench/monitor_faults.py [runs] [runs_dir]`` — prints JSON (default 12 runs of
-``bench/_runs/constant``, the cache ``python bench/monitor_mujoco.py --set constant`` fills).
+Run: ``python bench/monitor_faults.py [runs] [runs_dir]`` — prints JSON (default: the first 12 runs
+of the ``constant`` set, from the cache ``python bench/monitor_mujoco.py --set constant`` fills,
+``bench/_runs/constant``; simulated there if missing).
 
 Each MuJoCo run is monitored clean and with one fault at a time, on all four corners:
 
@@ -14,6 +15,9 @@ Each MuJoCo run is monitored clean and with one fault at a time, on all four cor
 - ``disconnected``: the rear-left wheel accelerometer reading only white noise of the sensors'
   0.5 m/s² (a loose connector or a sensor off its mount: no road signal, every sample plausible);
 - ``disconnected_body``: the same for the rear-left body (sprung) accelerometer;
+- ``gain``: the rear-left wheel accelerometer reading 10 % high (a sensitivity error; data sheets
+  of automotive MEMS accelerometers allow a few per cent): plausible, with the road's signal, so
+  no check can take it for a fault;
 - ``dead_yaw_rate``, ``dead_lat_accel``, ``dead_long_accel``: the body's yaw-rate sensor, lateral or
   longitudinal accelerometer silent over the whole run (only the radius analysis reads them: the
   ``fused`` numbers alone; the analysis takes the wheels' kinematics instead);
@@ -66,6 +70,9 @@ def _faults(acc_s: np.ndarray, acc_u: np.ndarray, t: np.ndarray) -> dict:
     s = acc_s.copy()
     s[:, 2] = np.random.default_rng(2027).normal(0.0, 0.5, t.size)
     cases["disconnected_body"] = (s, acc_u)
+    u = acc_u.copy()
+    u[:, 2] *= 1.10
+    cases["gain"] = (acc_s, u)
     return cases
 
 
@@ -103,13 +110,14 @@ def _by_tyre(errors: np.ndarray) -> dict:
 def main() -> None:
     from suvtwin.estimators.monitor import SKIP_REASONS
     from suvtwin.pipeline.estimation import run_loads
+    from suvtwin.pipeline.monitor_scenarios import scenario_set, simulate_cached
     from suvtwin.pipeline.monitoring import monitor_signals
 
     n_runs = int(sys.argv[1]) if len(sys.argv) > 1 else 12
     folder = Path(sys.argv[2]) if len(sys.argv) > 2 else Path("bench/_runs/constant")
-    paths = sorted(folder.glob("*.parquet"))[:n_runs]
-    if not paths:
-        raise SystemExit(f"no runs in {folder}: run python bench/monitor_mujoco.py --set constant first")
+    # the set's first runs on the current simulator (the cache may hold runs of older ones)
+    found, _ = simulate_cached(scenario_set("constant", n_runs), folder, jobs=1)
+    paths = [p for p in found if p is not None]
     errors: dict = {}
     inside: dict = {}
     counts: dict = {}
