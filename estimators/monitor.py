@@ -44,7 +44,10 @@ rectangular, linear detrend; above ``merge_above_hz`` the periodogram is average
    speed whose spectral band (``band_cycles_per_m`` times the speed) stops below
    ``hop_margin`` times the corner's wheel-hop frequency: there k_t barely changes the
    spectrum and the model's errors near the resonance set the estimate, so the window is not
-   used for k_t. Each skip is counted, by reason, in the output; nothing is fatal.
+   used for k_t. So is a window where one of the corner's two accelerometers reads only its
+   noise while the other reads the road (``silent``: a disconnected sensor), one with no road
+   signal above the noise (``smooth``) and one where no linear model holds (``rough``; item 6).
+   Each skip is counted, by reason, in the output; nothing is fatal.
 2. **Each window's likelihood on a grid.** Each used window's 2×2 cross-periodogram of
    (sprung, unsprung) acceleration gives its Whittle log-likelihood on a fixed grid of the
    corner's unknowns: ``damping_points`` dampings over the model's ``damping_range`` (a
@@ -1809,7 +1812,7 @@ def _spiky(sub: np.ndarray, top: np.ndarray, bottom: np.ndarray, z: float):
 @cached_njit
 def _median_mad(sub):
     """Per row of `sub` (R, n): the median and 1.4826 × the median absolute deviation from it (as
-    :func:`numpy.median`, NaN where a row holds one; compiled: numpy's call costs ten times more)."""
+    :func:`numpy.median`, NaN where a row holds one; compiled: numpy's two calls cost three times more)."""
     n_r = sub.shape[0]
     med = np.empty(n_r)
     mad = np.empty(n_r)
