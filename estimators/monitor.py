@@ -1593,27 +1593,22 @@ class TyreMonitor:
                     changing=changing, mode=mode)  # fmt: skip
 
     def _road_signal_z(self, spec: np.ndarray, speed: float) -> np.ndarray:
-        r"""Per corner (C,), how far the window's unsprung power over the band stands above the
-        sensor's noise N, in standard errors of a noise-only window: :math:`z = \sum_f w_f(S_{22,f}/N
-        - 1)/\sqrt{\sum_f w_f}` (`spec` (C, 1, F, 3), w_f the Fourier frequencies averaged in band f:
-        with noise alone each periodogram bin is exponential about N, so z is about standard normal).
-        An energy detector: the road's signal is there to read k_t from only where z is large."""
-        weight = self._band(np.array([speed]))[0][0]
-        excess = (spec[:, 0, :, 1].real / self.noise - 1.0) @ weight
-        return excess / math.sqrt(max(float(weight.sum()), 1.0))
+        """Per corner (C,), how far the window's unsprung power over the band stands above the
+        sensor's noise (:func:`_energy_z`; `spec` (C, 1, F, 3)). The road's signal is there to read
+        k_t from only where z is large."""
+        return _energy_z(spec[:, 0, :, 1].real, self.noise, self._band(np.array([speed]))[0][0])
 
     def _silent(self, spec: np.ndarray, speed: float) -> np.ndarray:
-        r"""Per corner (C,), whether one of its two accelerometers is silent: over the band's
+        """Per corner (C,), whether one of its two accelerometers is silent: over the band's
         frequencies up to ``silent_band_hz`` (`spec` (C, 1, F, 3)), the energy detector
-        :math:`z = \sum_f w_f(S_f/N - 1)/\sqrt{\sum_f w_f}` of one channel is below ``min_signal_z``
-        while the other's is at least ``silent_other_z`` (:class:`MonitorConfig`). False where the
-        band holds no frequency there."""
+        (:func:`_energy_z`) of one channel is below ``min_signal_z`` while the other's is at least
+        ``silent_other_z`` (:class:`MonitorConfig`). False where the band holds no frequency there."""
         cfg = self.config
         weight = self._band(np.array([speed]))[0][0] * (self.freq <= cfg.silent_band_hz * (1.0 + _FREQ_TOL))
         if not np.any(weight > 0):
             return np.zeros(spec.shape[0], dtype=bool)
-        z = (spec[:, 0, :, :2].real / self.noise - 1.0).transpose(0, 2, 1) @ weight / math.sqrt(weight.sum())
-        body, wheel = z[:, 0], z[:, 1]
+        body = _energy_z(spec[:, 0, :, 0].real, self.noise, weight)
+        wheel = _energy_z(spec[:, 0, :, 1].real, self.noise, weight)
         return ((body < cfg.min_signal_z) & (wheel >= cfg.silent_other_z)) | (
             (wheel < cfg.min_signal_z) & (body >= cfg.silent_other_z)
         )
@@ -1733,6 +1728,14 @@ class TyreMonitor:
             spring_rate=spring_rate[None],
             tyre_contact=tyre_contact[None],
         )
+
+
+def _energy_z(power: np.ndarray, noise: float, weight: np.ndarray) -> np.ndarray:
+    r"""An energy detector: how far a periodogram stands above white noise of PSD `noise`, in
+    standard errors of a noise-only one, :math:`z = \sum_f w_f(P_f/N - 1)/\sqrt{\sum_f w_f}` per row
+    of `power` (…, F), w_f (F,) the Fourier frequencies averaged in band f (0 outside the band).
+    With noise alone each periodogram bin is exponential about N, so z is about standard normal."""
+    return (power / noise - 1.0) @ weight / math.sqrt(max(float(weight.sum()), 1.0))
 
 
 def _lattice(position: np.ndarray, dead: float = 0.25) -> tuple[np.ndarray, np.ndarray]:
