@@ -8,7 +8,8 @@ that ``suvtwin monitor`` uses by default; ``--dead-sensor``: a column of each ru
 throughout, e.g. ``rl_wheel_speed_radps``).
 Sets (:mod:`suvtwin.pipeline.monitor_scenarios`): ``constant``, ``slow_leak``, ``drop``,
 ``low_speed``, ``warning``, ``nominal_long``, ``reset_leak`` (ours: UN R141's procedure, the
-references learned after a reset and a 20 % leak later); every road level drawn anywhere in its class
+references learned after a reset and a 20 % leak later), ``warning_multi`` (ours: two or three tyres
+low, FMVSS 138's any number); every road level drawn anywhere in its class
 band, seeds from 900000 on (none a test uses). Default 4 runs per set (the issue asks for
 ≥ 100 for ``constant`` and ``warning``, and ≥ 500 simulated minutes for ``nominal_long``:
 ``--runs 130``, 98 lane-kept runs of 300 s and 32 weaves of 30 s).
@@ -17,9 +18,9 @@ The runs are simulated in ``--jobs`` processes into ``--runs-dir`` (default
 ``bench/_runs/<set>/``, one Parquet file per run named by the hash of its scenario and the
 simulator's code, so a second call reuses them); ``--discard-runs`` deletes each batch's files
 once monitored (a run takes ~0.8 MB per simulated second). The monitor
-(:func:`suvtwin.pipeline.monitoring.monitor_run`) gets each run file and, for the ``warning``
-and ``nominal_long`` sets, the run's placard pressure (``--reset-at S``: a driver reset at S s
-instead). Scored (:func:`suvtwin.pipeline.monitor_scoring.score_set`) against the run's true
+(:func:`suvtwin.pipeline.monitoring.monitor_run`) gets each run file and, for the ``warning``,
+``warning_multi`` and ``nominal_long`` sets, the run's placard pressure (``--reset-at S``: a driver
+reset at S s instead). Scored (:func:`suvtwin.pipeline.monitor_scoring.score_set`) against the run's true
 pressures, beside the issue's targets; also the simulation and monitor throughput (driving s
 per wall s; the monitor's includes reading the file and, on its first run per process, JIT
 compilation), runs whose simulation diverged (left out of the scores), and what the car went
@@ -42,9 +43,10 @@ from suvtwin.pipeline.monitor_scenarios import SETS, monitor_traces, scenario_se
 from suvtwin.pipeline.monitor_scoring import issue_targets, score_set
 
 ISSUE_SIZE = {"constant": 100, "slow_leak": 20, "drop": 20, "low_speed": 20, "warning": 100,
-              "nominal_long": 130, "reset_leak": 40}  # fmt: skip
+              "nominal_long": 130, "reset_leak": 40, "warning_multi": 100}  # fmt: skip
 """Runs the issue asks for (``constant``, ``warning``: ≥ 100; ``nominal_long``: ≥ 500 simulated min, which
-130 runs give: 98 of 300 s and 32 weaves of 30 s); the change and low-speed sets have no stated size."""
+130 runs give: 98 of 300 s and 32 weaves of 30 s); the change and low-speed sets have no stated size;
+``warning_multi`` is ours, sized as ``warning``."""
 
 
 def run_conditions(path: Path) -> dict:

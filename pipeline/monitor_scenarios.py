@@ -34,6 +34,8 @@ The sets (what issue 12 asks the monitor to be scored on):
   all tyres at a placard drawn in 200–250 kPa, which the monitor is not given (it learns the
   references after a reset at the start); from a time drawn in 150–180 s one tyre (each corner in
   turn) or, every fifth run, all four lose `loss` (20 %) linearly over 30 s; 40–120 km/h, 300 s.
+- ``warning_multi``: as ``warning`` with two or three tyres low (:data:`MULTI_DEFLATED` in turn:
+  both fronts, both rears, a side, a diagonal, any three), FMVSS 138's "any number of tyres".
 
 Loads: a total mass drawn uniformly in 0–300 kg split (flat Dirichlet) over one to three of
 the places where a SUV carries it (front passenger seat, rear seats, boot), positions from the
@@ -59,6 +61,7 @@ from suvtwin.roads.iso8608 import draw_level_in_class
 
 __all__ = [
     "LOAD_PLACES_M",
+    "MULTI_DEFLATED",
     "SEED_BASE",
     "SETS",
     "BenchRun",
@@ -70,7 +73,8 @@ __all__ = [
 
 SEED_BASE = 900_000
 """First scenario seed of the bench sets (tests use small seeds)."""
-SETS = ("constant", "slow_leak", "drop", "low_speed", "warning", "nominal_long", "reset_leak")
+SETS = ("constant", "slow_leak", "drop", "low_speed", "warning", "nominal_long", "reset_leak",
+        "warning_multi")
 """Names of the scenario sets, in the order their seeds are numbered."""
 CLASSES = "ABCD"
 PRESSURE_KPA = (130.0, 230.0)
@@ -225,15 +229,26 @@ def _drop(i: int, duration_s: float = 40.0) -> BenchRun:
     return BenchRun(name, "drop", _scenario(name, data), info)
 
 
-def _warning(i: int, duration_s: float = 60.0, loss: float = 0.20) -> BenchRun:
-    rng, data, info = _base_run("warning", i, duration_s=duration_s, speed_kmh=(40.0, 120.0))
+MULTI_DEFLATED = (
+    ("fl", "fr"), ("rl", "rr"), ("fl", "rl"), ("fr", "rr"), ("fl", "rr"), ("fr", "rl"),
+    ("fr", "rl", "rr"), ("fl", "rl", "rr"), ("fl", "fr", "rr"), ("fl", "fr", "rl"),
+)
+"""The ``warning_multi`` set's low tyres, run i taking entry i mod 10: every pair (an axle, a side, a
+diagonal) and every three (FMVSS 138 asks for a warning with any number of tyres low)."""
+
+
+def _warning(i: int, duration_s: float = 60.0, loss: float = 0.20, set_name: str = "warning") -> BenchRun:
+    rng, data, info = _base_run(set_name, i, duration_s=duration_s, speed_kmh=(40.0, 120.0))
     placard = round(float(rng.uniform(*PLACARD_KPA)), 3)
-    deflated = list(CORNERS) if i % 5 == 4 else [CORNERS[i % 5]]
+    if set_name == "warning_multi":
+        deflated = list(MULTI_DEFLATED[i % len(MULTI_DEFLATED)])
+    else:
+        deflated = list(CORNERS) if i % 5 == 4 else [CORNERS[i % 5]]
     low = round(placard * (1.0 - loss), 3)
     data["pressure_kpa"] = {c: low if c in deflated else placard for c in CORNERS}
     info.update(placard_kpa=placard, deflated=deflated, loss=loss)
-    name = f"warning_{i:04d}"
-    return BenchRun(name, "warning", _scenario(name, data), info)
+    name = f"{set_name}_{i:04d}"
+    return BenchRun(name, set_name, _scenario(name, data), info)
 
 
 def _reset_leak(i: int, duration_s: float = 300.0, loss: float = 0.20) -> BenchRun:
@@ -326,6 +341,7 @@ def scenario_set(
         "slow_leak": lambda i: _slow_leak(i, duration_s or 60.0),
         "drop": lambda i: _drop(i, duration_s or 40.0),
         "warning": lambda i: _warning(i, duration_s or 60.0, loss),
+        "warning_multi": lambda i: _warning(i, duration_s or 60.0, loss, "warning_multi"),
         "nominal_long": lambda i: _nominal_long(i, duration_s or 300.0, weave_every, weave_duration_s),
         "reset_leak": lambda i: _reset_leak(i, duration_s or 300.0, loss),
     }[set_name]

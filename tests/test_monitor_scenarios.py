@@ -3,6 +3,8 @@ issue 12, seeds apart from the tests', and the simulation cache with a stand-in 
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -87,6 +89,21 @@ def test_warning_set_deflates_each_tyre_and_all_four_by_the_loss():
             want = r.placard_kpa * (0.75 if c in r.info["deflated"] else 1.0)
             assert p[c] == pytest.approx(want, abs=1e-3)
         assert r.scenario.pressure_events == [] and r.scenario.duration_s == 60.0
+
+
+def test_warning_multi_set_deflates_every_pair_and_every_three():
+    runs = scenario_set("warning_multi", 10)
+    low = [frozenset(r.info["deflated"]) for r in runs]
+    pairs = {frozenset(p) for p in itertools.combinations(CORNERS, 2)}
+    threes = {frozenset(p) for p in itertools.combinations(CORNERS, 3)}
+    assert set(low) == pairs | threes and len(set(low)) == 10
+    for r in runs:
+        p = _pressures(r.scenario)
+        for c in CORNERS:
+            assert p[c] == pytest.approx(r.placard_kpa * (0.8 if c in r.info["deflated"] else 1.0), abs=1e-3)
+    # its own seeds: no run repeats a `warning` run's road
+    seeds = {r.scenario.seed for r in scenario_set("warning", 10)}
+    assert not seeds & {r.scenario.seed for r in runs}
 
 
 def test_nominal_long_has_speed_changes_several_classes_and_weaves():

@@ -161,6 +161,14 @@ def test_warning_detection_within_a_window_of_driving():
     assert out["telltale"]["one_tyre"] == {"runs": 2, "detected": 0.5}
     early = warning_detection(runs[1:2], [["fl", "fr", "rl", "rr"]], window_s=5.0)
     assert early["telltale"]["detected"] == 0.0
+    assert "two_tyres" not in out and "three_tyres" not in out
+    # two and three tyres low: their own kinds; run 2 warns fl, fr, rl at 1 s, not rr
+    some = warning_detection(runs[1:2] * 3, [["fl", "fr"], ["fl", "rr"], ["fl", "fr", "rl"]], window_s=60.0)
+    assert some["two_tyres"] == {"runs": 2, "detected": 0.5}
+    assert some["three_tyres"] == {"runs": 1, "detected": 1.0}
+    assert some["one_tyre"] == {"runs": 0, "detected": None}
+    assert some["telltale"]["two_tyres"] == {"runs": 2, "detected": 1.0}
+    assert some["warnings_on_inflated_tyres"] == 1 + 2 + 0  # rl in run 1; fr and rl in run 2
 
 
 def test_warning_detection_after_a_loss_counts_driving_from_its_end_and_early_warnings_as_false():

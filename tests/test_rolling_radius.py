@@ -440,6 +440,35 @@ def test_the_radii_let_the_common_loss_take_a_tyre_whose_windows_were_refused():
     assert np.isnan(w.common_probability).all() and np.isnan(w.warning_time_s[1:]).all()
 
 
+def test_the_radii_keep_a_one_sided_loss_from_the_car_s_common_loss():
+    from suvtwin.estimators.deflation import deflation_warnings
+
+    # the left front and rear 20 % below a 230 kPa placard (184 kPa), the right at it; the vibration
+    # reads every tyre low (178 / 196 kPa, σ 12 kPa), as a shared error of a track would. Its own
+    # common fit (tracks correlated 0.75) passes its χ² and the common loss's probability, 0.951,
+    # would warn the two inflated tyres
+    n_k = 4
+    t = np.arange(1, n_k + 1) * 4.0
+    p = np.tile([178.0, 196.0, 178.0, 196.0], (n_k, 1))
+    sig, obs, tracks = np.full((n_k, 4), 12.0), np.ones((n_k, 4), bool), ((0, 2), (1, 3))
+    alone = deflation_warnings(t, p, sig, obs, placard_kpa=230.0, tracks=tracks)
+    assert np.all(alone.common_probability > 0.95) and np.isfinite(alone.warning_time_s).all()
+    # the radii see the two left tyres 46 kPa below the right ones (0.1 ‰/kPa, σ 0.2 ‰ per wheel):
+    # against their contrasts one relative pressure fails, and only the left tyres are warned
+    d = np.array([-46.0e-4, 0.0, -46.0e-4, 0.0])
+    ev = _evidence(n_k, d - (d.sum() - d) / 3, np.full(4, 0.2e-3), 0.1e-3, placard=230.0)
+    w = deflation_warnings(t, p, sig, obs, placard_kpa=230.0, tracks=tracks, radius=ev)
+    assert np.isnan(w.common_probability).all()
+    assert np.isfinite(w.warning_time_s[[0, 2]]).all() and np.isnan(w.warning_time_s[[1, 3]]).all()
+    # all four alike, the radii saying so: the common loss stands, as the vibration's fit has it
+    even = np.full((n_k, 4), 184.0)
+    ev = _evidence(n_k, np.zeros(4), np.full(4, 0.2e-3), 0.1e-3, placard=230.0)
+    w = deflation_warnings(t, even, sig, obs, placard_kpa=230.0, tracks=tracks, radius=ev)
+    by_vibration = deflation_warnings(t, even, sig, obs, placard_kpa=230.0, tracks=tracks)
+    np.testing.assert_allclose(w.common_probability, by_vibration.common_probability, rtol=1e-12)
+    assert np.all(w.common_probability > 0.95)
+
+
 def test_learned_references_calibrate_the_radii_and_a_later_loss_warns_through_them():
     from suvtwin.estimators.deflation import DeflationRule, deflation_warnings
 
