@@ -1,7 +1,9 @@
 """The four-corner tyre-pressure monitor (issue 12) on MuJoCo ground truth, one scenario set at a time.
 
-Run: ``python bench/monitor_mujoco.py --set constant --runs 100 [--jobs 2] [--corner-model roll_plane]
-[--no-preview] [--road-waviness free] [--dead-sensor COLUMN]`` — prints JSON (``--corner-model``: the
+Run: ``python bench/monitor_mujoco.py --set constant --runs 100 [--first 0] [--jobs 2]
+[--corner-model roll_plane] [--no-preview] [--road-waviness free] [--dead-sensor COLUMN]`` — prints
+JSON (``--first``: the set's runs from that one on, e.g. 5000 for runs no default call draws, to see
+a score is not the draw's; ``--corner-model``: the
 monitor's corner model, default the full car; ``--road-waviness``: its prior on the road's
 waviness, default ``iso``; ``--no-preview``: each tyre on its own, without the front→rear preview
 that ``suvtwin monitor`` uses by default; ``--dead-sensor``: a column of each run file NaN
@@ -146,6 +148,8 @@ def main(argv: list[str] | None = None) -> dict:
     add = parser.add_argument
     add("--set", default="constant", choices=SETS)
     add("--runs", type=int, default=4, help="runs of the set (default 4)")
+    add("--first", type=int, default=0,
+        help="the set's first run taken (default 0; e.g. 5000: fresh runs no default call draws)")
     add("--duration", type=float, default=None, help="run length, s (default: the set's)")
     add("--jobs", type=int, default=2, help="processes (default 2)")
     add("--runs-dir", type=Path, default=None, help="run cache (default bench/_runs/<set>)")
@@ -171,7 +175,7 @@ def main(argv: list[str] | None = None) -> dict:
     add("--simulate-only", action="store_true", help="fill the run cache, run no monitor")
     args = parser.parse_args(argv)
 
-    runs = scenario_set(args.set, args.runs, duration_s=args.duration, loss=args.loss,
+    runs = scenario_set(args.set, args.runs, duration_s=args.duration, loss=args.loss, first=args.first,
                         weave_every=args.weave_every, weave_duration_s=args.weave_duration)  # fmt: skip
     if args.reset_at is not None:
         for r in runs:
@@ -181,6 +185,7 @@ def main(argv: list[str] | None = None) -> dict:
         "bench": "monitor_mujoco",
         "set": args.set,
         "runs": len(runs),
+        "first_run": args.first,
         "issue_size": ISSUE_SIZE[args.set],
         "simulated_min": sum(r.scenario.duration_s for r in runs) / 60.0,
         "options": {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items()},

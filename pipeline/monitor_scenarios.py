@@ -7,9 +7,9 @@ Usual call: ``runs = scenario_set("constant", 100)``;
 
 Each set is a list of :class:`BenchRun` (a validated :class:`~suvtwin.pipeline.scenario.Scenario`
 plus what a scorer needs to know about it). Every draw of run `i` of a set comes from its own
-seed ``SEED_BASE + 10000·set index + i`` only, so a bigger set with the same seed base holds
-the smaller one's runs, and no seed coincides with the small seeds the tests use. Road levels
-are drawn log-uniformly across their ISO 8608 class band
+seed ``SEED_BASE + 10000·set index + i`` only (:data:`RUNS_PER_SET`), so a bigger set with the
+same seed base holds the smaller one's runs, and no seed coincides with the small seeds the tests
+use. Road levels are drawn log-uniformly across their ISO 8608 class band
 (:func:`suvtwin.roads.iso8608.draw_level_in_class`), not fixed at the class centre.
 
 The sets (what issue 12 asks the monitor to be scored on):
@@ -62,6 +62,7 @@ from suvtwin.roads.iso8608 import draw_level_in_class
 __all__ = [
     "LOAD_PLACES_M",
     "MULTI_DEFLATED",
+    "RUNS_PER_SET",
     "SEED_BASE",
     "SETS",
     "BenchRun",
@@ -76,6 +77,8 @@ SEED_BASE = 900_000
 SETS = ("constant", "slow_leak", "drop", "low_speed", "warning", "nominal_long", "reset_leak",
         "warning_multi")
 """Names of the scenario sets, in the order their seeds are numbered."""
+RUNS_PER_SET = 10_000
+"""Seeds per set: run i of set j has the seed ``SEED_BASE + RUNS_PER_SET·j + i``."""
 CLASSES = "ABCD"
 PRESSURE_KPA = (130.0, 230.0)
 PLACARD_KPA = (200.0, 250.0)
@@ -114,7 +117,7 @@ class BenchRun:
 
 
 def _rng(set_name: str, index: int) -> tuple[int, np.random.Generator]:
-    seed = SEED_BASE + 10_000 * SETS.index(set_name) + index
+    seed = SEED_BASE + RUNS_PER_SET * SETS.index(set_name) + index
     return seed, np.random.default_rng(np.random.SeedSequence([seed]))
 
 
@@ -321,8 +324,11 @@ def scenario_set(
     loss: float = 0.20,
     weave_every: int = 4,
     weave_duration_s: float = 30.0,
+    first: int = 0,
 ) -> list[BenchRun]:
-    """The first `n_runs` runs of the bench set `set_name` (one of :data:`SETS`).
+    """`n_runs` runs of the bench set `set_name` (one of :data:`SETS`), from its run `first` on
+    (default the first; another `first` draws runs no earlier call with a lower range holds, e.g. to
+    check that a score is not the draw's: at most :data:`RUNS_PER_SET` in all).
 
     `duration_s` overrides the set's run length (s; for ``nominal_long`` the lane-kept runs'
     length, default 300 s); `loss` is the ``warning`` set's pressure loss (fraction of placard);
@@ -333,6 +339,9 @@ def scenario_set(
         raise InputError(f"set must be one of {', '.join(SETS)}, got {set_name!r}")
     if not (isinstance(n_runs, int) and n_runs >= 1):
         raise InputError(f"n_runs must be a positive whole number, got {n_runs!r}")
+    if not (isinstance(first, int) and 0 <= first and first + n_runs <= RUNS_PER_SET):
+        raise InputError(f"first must be a whole number with 0 <= first and first + n_runs <= "
+                         f"{RUNS_PER_SET}, got first={first!r}, n_runs={n_runs!r}")  # fmt: skip
     if not 0.0 < loss < 0.6:
         raise InputError(f"loss must be in (0, 0.6), got {loss!r}")
     make = {
@@ -345,7 +354,7 @@ def scenario_set(
         "nominal_long": lambda i: _nominal_long(i, duration_s or 300.0, weave_every, weave_duration_s),
         "reset_leak": lambda i: _reset_leak(i, duration_s or 300.0, loss),
     }[set_name]
-    return [make(i) for i in range(n_runs)]
+    return [make(i) for i in range(first, first + n_runs)]
 
 
 def run_key(scenario: Scenario, fingerprint: dict | None = None) -> str:

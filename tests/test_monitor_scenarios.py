@@ -106,6 +106,18 @@ def test_warning_multi_set_deflates_every_pair_and_every_three():
     assert not seeds & {r.scenario.seed for r in runs}
 
 
+def test_a_set_from_a_later_first_run_holds_those_runs_and_stays_in_its_seeds():
+    late = scenario_set("constant", 3, first=5000)
+    assert [r.name for r in late] == ["constant_5000", "constant_5001", "constant_5002"]
+    assert [r.scenario.seed for r in late] == [SEED_BASE + 5000 + i for i in range(3)]
+    # the same runs as a longer set from 0 would hold (each run's draws are its own seed's)
+    again = scenario_set("constant", 2, first=5001)
+    assert again[0].scenario.model_dump() == late[1].scenario.model_dump()
+    for bad in (-1, 9999):  # 9999 + 3 runs would take seeds of the next set
+        with pytest.raises(InputError, match="first"):
+            scenario_set("constant", 3, first=bad)
+
+
 def test_nominal_long_has_speed_changes_several_classes_and_weaves():
     runs = scenario_set("nominal_long", 8, duration_s=300.0, weave_every=4, weave_duration_s=30.0)
     lane = [r for r in runs if not r.info.get("weave")]
