@@ -201,7 +201,7 @@ def main(argv: list[str] | None = None) -> dict:
     sim_costs, mon_costs, traces, extras, conditions, scored = [], [], [], [], {}, []
     for start in range(0, len(runs), batch):
         part = runs[start : start + batch]
-        label = f"monitor_mujoco: {args.set} runs {start}–{start + len(part) - 1}"
+        label = f"monitor_mujoco: {args.set} runs {args.first + start}–{args.first + start + len(part) - 1}"
         print(f"{label}: simulating", file=sys.stderr)
         paths, cost = simulate_cached(part, folder, jobs=args.jobs)
         sim_costs.append(cost)
