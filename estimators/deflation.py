@@ -479,7 +479,8 @@ def _common_fit(inside, rel, rel_sd, rho, fused_rel, fused_cov):
 def _radii_refute_common(fused_rel: np.ndarray, fused_cov: np.ndarray, alpha: float) -> bool:
     r"""Whether the estimates fused with the radii (`fused_rel` (C,): over their references, `fused_cov`
     (C, C) their covariance, relative) reject at level `alpha` that one relative pressure explains
-    every tyre: the χ² of :func:`_common_loss` on them. False where they are not all known.
+    every tyre (the χ² of :func:`_common_gls`). False where they are not all known or their
+    covariance is degenerate.
 
     Where every tyre is observable the common fit is the vibration estimates', whose errors are
     correlated 0.75 along a track: two tyres low on one side look to it like that track's shared
@@ -488,12 +489,13 @@ def _radii_refute_common(fused_rel: np.ndarray, fused_cov: np.ndarray, alpha: fl
     20 % low, class A at 116 km/h: the vibration's fit passed and warned the two inflated tyres)."""
     if not (np.all(np.isfinite(fused_rel)) and np.all(np.isfinite(fused_cov))):
         return False
-    return bool(np.isnan(_common_loss(fused_rel, fused_cov, 1.0, alpha)))
+    fit = _common_gls(fused_rel, fused_cov)
+    return fit is not None and fit[2] < alpha
 
 
-def _common_loss(rel: np.ndarray, cov: np.ndarray, keep: float, alpha: float) -> float:
-    r"""Probability that tyres sharing one relative pressure r have it below `keep`, or NaN where
-    the test that they share it fails at level `alpha`.
+def _common_gls(rel: np.ndarray, cov: np.ndarray) -> tuple[float, float, float] | None:
+    r"""One relative pressure r fitted to every tyre's: its estimate, σ and the fit's χ² p-value, or
+    None where the covariance is degenerate.
 
     `rel` (n,): each tyre's estimate over its reference; `cov` (n, n): their errors' covariance
     Σ (relative). Generalized least squares:
@@ -503,15 +505,23 @@ def _common_loss(rel: np.ndarray, cov: np.ndarray, keep: float, alpha: float) ->
     try:
         inv_one, inv_rel = np.linalg.solve(cov, np.column_stack([np.ones(rel.size), rel])).T
     except np.linalg.LinAlgError:
-        return math.nan
+        return None
     info = float(inv_one.sum())
     if not (np.isfinite(info) and info > 0.0):
-        return math.nan
+        return None
     r_hat = float(inv_one @ rel) / info
     chi2 = float(inv_rel @ rel) - r_hat**2 * info  # (u − r̂)ᵀΣ⁻¹(u − r̂)
-    if scipy.special.chdtrc(rel.size - 1, max(chi2, 0.0)) < alpha:
+    return r_hat, 1.0 / math.sqrt(info), float(scipy.special.chdtrc(rel.size - 1, max(chi2, 0.0)))
+
+
+def _common_loss(rel: np.ndarray, cov: np.ndarray, keep: float, alpha: float) -> float:
+    """Probability that tyres sharing one relative pressure r (:func:`_common_gls` of `rel`, `cov`)
+    have it below `keep`, or NaN where the test that they share it fails at level `alpha` (or the
+    covariance is degenerate)."""
+    fit = _common_gls(rel, cov)
+    if fit is None or fit[2] < alpha:
         return math.nan
-    return _below(keep, r_hat, 1.0 / math.sqrt(info))
+    return _below(keep, fit[0], fit[1])
 
 
 def _below(threshold: float, mean: float, spread: float) -> float:
