@@ -327,11 +327,11 @@ def scenario_set(
     first: int = 0,
 ) -> list[BenchRun]:
     """`n_runs` runs of the bench set `set_name` (one of :data:`SETS`), from its run `first` on
-    (default the first; another `first` draws runs no earlier call with a lower range holds, e.g. to
-    check that a score is not the draw's: at most :data:`RUNS_PER_SET` in all).
+    (default 0, the set's first runs; a later `first`, e.g. 5000, gives runs the default calls never
+    draw, to check that a score is not its draw's; `first` + `n_runs` ≤ :data:`RUNS_PER_SET`).
 
     `duration_s` overrides the set's run length (s; for ``nominal_long`` the lane-kept runs'
-    length, default 300 s); `loss` is the ``warning`` set's pressure loss (fraction of placard);
+    length, default 300 s); `loss` is the warning sets' pressure loss (fraction of placard);
     every `weave_every`-th ``nominal_long`` run (0: none) is an open-loop weave of
     `weave_duration_s`.
     """
