@@ -67,13 +67,13 @@ refused (rough) is tied to the others by its radius, to within the tyres' spread
 also tests the radii's contrasts. Where all are observable the fit stays the vibration estimates'
 (the spread of their upper tails, as each tyre's own probability): with the fused estimates there
 too (their symmetric σ), the ``reset_leak`` runs' all four warned in 3 of 8 instead of 4. But the
-fused estimates' χ² must pass too where they are known (:func:`_radii_refute_common`): the
-vibration's errors are correlated 0.75 along a track, so two tyres low on one side (or an axle
-with a track's error beside it) fit one common loss by the vibration alone, and on MuJoCo runs
-with two or three tyres low it warned inflated ones (the ``warning_multi`` bench set, 100 runs: 4
-warnings on inflated tyres before, none after; the low tyres warned in 81 % of the runs either
-way); the radii's contrasts refute it. With
-one tyre model slope for all, a common r moves no excess, so the fit's r is the vibration
+fused estimates' χ² must pass too where they are known (:func:`_radii_refute_common`, in
+:func:`_common_fit`): the vibration's errors are correlated 0.75 along a track, so two tyres low
+on one side (or an axle with a track's error beside it) fit one common loss by the vibration
+alone, and on MuJoCo runs with two or three tyres low it warned inflated ones (the
+``warning_multi`` bench set, 100 runs: 4 warnings on inflated tyres before, none after; the low
+tyres warned in 81 % of the runs either way); the radii's contrasts refute it. With one tyre
+model slope for all, a common r moves no excess, so the fit's r is the vibration
 estimates' own least-squares mean, the refused tyre's at its wide σ: the radii add the tie and
 the test, not a level. A tyre neither observable nor fused has only the monitor's prior, the
 same for every tyre, whose error no correlation here describes: it is never fitted. On the
@@ -413,12 +413,11 @@ def deflation_warnings(
         inside = obs[k] & np.isfinite(rel)
         if rule.common_alpha is not None:
             scale = np.outer(ref_now, ref_now)
-            fit = _common_fit(inside, rel, rel_sd, rho, fused[k] / ref_now, fused_cov[k] / scale)
+            fit = _common_fit(inside, rel, rel_sd, rho, fused[k] / ref_now, fused_cov[k] / scale,
+                              rule.common_alpha)  # fmt: skip
             if fit is not None:
                 inside, u, cov_u = fit
                 common[k] = _common_loss(u, cov_u, keep, rule.common_alpha)
-                if _radii_refute_common(fused[k] / ref_now, fused_cov[k] / scale, rule.common_alpha):
-                    common[k] = math.nan  # the radii's contrasts say the tyres differ
         for c in range(n_c):
             apart = relative[k, c] >= rule.probability  # NaN: no
             if np.isnan(ref_now[c]) and np.isnan(relative[k, c]):
@@ -455,21 +454,24 @@ def _relative_loss(radius: RadiusEvidence, k: int, early, fraction: float) -> np
     return scipy.special.ndtr((deficit - gain * fraction * p0) / spread)
 
 
-def _common_fit(inside, rel, rel_sd, rho, fused_rel, fused_cov):
+def _common_fit(inside, rel, rel_sd, rho, fused_rel, fused_cov, alpha):
     r"""Which tyres the common loss is fitted over at a row, and with what: None (no fit), or the
     tyres (C,) bool, their relative pressures and its covariance; three or more observable
     (`inside`) in any case. Where every tyre with a reference (`rel` finite) is observable: those,
     each vibration estimate `rel` ± `rel_sd` (the spread of its upper tail, as the tyre's own
-    probability) correlated by `rho`. Else, where every tyre's estimate fused with the radii is known
-    (`fused_rel` (C,): over its reference, `fused_cov` (C, C) its covariance, relative): all of them,
-    fused — the radii tie a tyre whose windows were refused to the others (its contrast to them, to
-    within the tyres' spread), and the fusion's covariance carries that tie. A tyre that is neither
-    observable nor fused has only the monitor's prior, the same for every tyre: its error is not one
-    `rho` describes, so it is never fitted."""
+    probability) correlated by `rho` — unless the estimates fused with the radii refute one common
+    value at level `alpha` (:func:`_radii_refute_common`): then None. Else, where every tyre's
+    estimate fused with the radii is known (`fused_rel` (C,): over its reference, `fused_cov` (C, C)
+    its covariance, relative): all of them, fused — the radii tie a tyre whose windows were refused
+    to the others (its contrast to them, to within the tyres' spread), and the fusion's covariance
+    carries that tie. A tyre that is neither observable nor fused has only the monitor's prior, the
+    same for every tyre: its error is not one `rho` describes, so it is never fitted."""
     known = np.isfinite(rel)
     if np.count_nonzero(inside) < 3:
         return None
     if np.all(inside[known]):
+        if _radii_refute_common(fused_rel, fused_cov, alpha):
+            return None  # the radii's contrasts say the tyres differ
         return inside, rel[inside], rho[np.ix_(inside, inside)] * np.outer(rel_sd[inside], rel_sd[inside])
     if np.all(known) and np.all(np.isfinite(fused_rel)) and np.all(np.isfinite(fused_cov)):
         return known, fused_rel, fused_cov
