@@ -857,6 +857,7 @@ class TyreMonitor:
         self._group_start = np.flatnonzero(np.r_[True, np.diff(group) != 0])  # reduceat offsets
         self._group_size = np.diff(np.r_[self._group_start, fine.size]).astype(float)
         self.freq = np.add.reduceat(fine, self._group_start) / self._group_size
+        self._silent_bins = self.freq <= cfg.silent_band_hz * (1.0 + _FREQ_TOL)  # the body's band (_silent)
         if self.freq.size < 4:
             raise InputError("the frequency band holds fewer than 4 Fourier frequencies; lengthen segment_s")
         self.noise = 2.0 * cfg.sigma_accel**2 * dt  # one-sided white-noise PSD, (m/s²)²/Hz
@@ -1335,7 +1336,8 @@ class TyreMonitor:
                 spec[whole, 0] = self._cross_spectra(a_s[:, whole], a_u[:, whole])
             for c in np.flatnonzero(used & ~whole):
                 spec[c, 0] = self._cross_spectra(a_s[-tail[c] :, c : c + 1], a_u[-tail[c] :, c : c + 1])[0]
-            silent = used & self._silent(spec, speed)
+            band_weight = self._band(np.array([speed]))[0][0]  # the window's band (F,), both checks'
+            silent = used & self._silent(spec, band_weight)
             if np.any(silent):  # one sensor reads noise while the road moves the other: a sensor fault
                 status[silent] = _SILENT
                 s.counts["used"][silent] -= 1
@@ -1367,7 +1369,8 @@ class TyreMonitor:
         self._feed_previews(block, status, elapsed)
         if np.any(used):
             ll, lam = self._window_grid(spec, used, speed, table, blend)
-            smooth = used & ((self._road_signal_z(spec, speed) < cfg.min_signal_z) | _at_level_floor(ll, lam))
+            smooth = used & ((self._road_signal_z(spec, band_weight) < cfg.min_signal_z)
+                             | _at_level_floor(ll, lam))  # fmt: skip
             if np.any(smooth):  # no road signal above the sensors' noise: nothing to read k_t from
                 status[smooth] = _SMOOTH
                 s.counts["used"][smooth] -= 1
@@ -1592,19 +1595,20 @@ class TyreMonitor:
         return _Fit(p_mean=p_mean, p_var=p_var, p_tails=p_tails, w_mean=w_mean, w_var=w_var,
                     changing=changing, mode=mode)  # fmt: skip
 
-    def _road_signal_z(self, spec: np.ndarray, speed: float) -> np.ndarray:
-        """Per corner (C,), how far the window's unsprung power over the band stands above the
-        sensor's noise (:func:`_energy_z`; `spec` (C, 1, F, 3)). The road's signal is there to read
-        k_t from only where z is large."""
-        return _energy_z(spec[:, 0, :, 1].real, self.noise, self._band(np.array([speed]))[0][0])
+    def _road_signal_z(self, spec: np.ndarray, band_weight: np.ndarray) -> np.ndarray:
+        """Per corner (C,), how far the window's unsprung power over its band (`band_weight` (F,),
+        :meth:`_band`'s at the window's speed) stands above the sensor's noise (:func:`_energy_z`;
+        `spec` (C, 1, F, 3)). The road's signal is there to read k_t from only where z is large."""
+        return _energy_z(spec[:, 0, :, 1].real, self.noise, band_weight)
 
-    def _silent(self, spec: np.ndarray, speed: float) -> np.ndarray:
-        """Per corner (C,), whether one of its two accelerometers is silent: over the band's
-        frequencies up to ``silent_band_hz`` (`spec` (C, 1, F, 3)), the energy detector
-        (:func:`_energy_z`) of one channel is below ``min_signal_z`` while the other's is at least
-        ``silent_other_z`` (:class:`MonitorConfig`). False where the band holds no frequency there."""
+    def _silent(self, spec: np.ndarray, band_weight: np.ndarray) -> np.ndarray:
+        """Per corner (C,), whether one of its two accelerometers is silent: over the window's band
+        (`band_weight` (F,), :meth:`_band`'s) up to ``silent_band_hz`` (`spec` (C, 1, F, 3)), the
+        energy detector (:func:`_energy_z`) of one channel is below ``min_signal_z`` while the
+        other's is at least ``silent_other_z`` (:class:`MonitorConfig`). False where the band holds
+        no frequency there."""
         cfg = self.config
-        weight = self._band(np.array([speed]))[0][0] * (self.freq <= cfg.silent_band_hz * (1.0 + _FREQ_TOL))
+        weight = band_weight * self._silent_bins
         if not np.any(weight > 0):
             return np.zeros(spec.shape[0], dtype=bool)
         body = _energy_z(spec[:, 0, :, 0].real, self.noise, weight)
