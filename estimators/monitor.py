@@ -660,6 +660,34 @@ def _window_loglik(proj, noise, weight, lo, hi, base, gain, slot, lam_lo, lam_hi
 
 
 @cached_njit
+def _blend_rows(table, slots, weights, out):
+    """out[r] = Σ_k weights[r, k] table[slots[r, k]] for tables flattened to (S, M) and rows (R, M)
+    (:meth:`TyreMonitor._blend`): the first term times its weight, then each later one with a
+    positive weight added in turn; where no row has a second term the first is copied unscaled (its
+    weight is 1). The same operations, in the same order, as the numpy indexing it replaced, without
+    its temporary arrays (five blends an update, each 30–200 µs in numpy)."""
+    n_r, n_k = slots.shape
+    scale = False
+    for r in range(n_r):
+        for k in range(1, n_k):
+            if weights[r, k] != 0.0:
+                scale = True
+    for r in range(n_r):
+        first = slots[r, 0]
+        w0 = weights[r, 0]
+        for m in range(out.shape[1]):
+            out[r, m] = table[first, m] * w0 if scale else table[first, m]
+        if not scale:
+            continue
+        for k in range(1, n_k):
+            w = weights[r, k]
+            if w > 0.0:
+                s = slots[r, k]
+                for m in range(out.shape[1]):
+                    out[r, m] += w * table[s, m]
+
+
+@cached_njit
 def _mix_walk_banded(post, w_steady, w_changing, indptr, indices, data, moved, to):
     """moved[:, to] = the regimes' mixture w_steady post[:, 0] + w_changing post[:, 1] walked along
     pressure by a banded walk (CSR rows: to, columns: from), in one pass over `post` (C, R, D, B, P)
@@ -1094,15 +1122,9 @@ class TyreMonitor:
     def _blend(self, table: np.ndarray, slots: np.ndarray, weights: np.ndarray) -> np.ndarray:
         """Σ_k weights[:, k] table[slots[:, k]]: the rows' tables blended, (R, …) from slots and
         weights (R, K) (zero weights skipped)."""
-        out = table[slots[:, 0]]
-        if np.all(weights[:, 1:] == 0.0):  # each row on one lattice point
-            return out
-        out *= weights[:, 0].reshape((-1,) + (1,) * (table.ndim - 1))
-        for k in range(1, slots.shape[1]):
-            rows = np.flatnonzero(weights[:, k] > 0.0)
-            if rows.size:
-                w = weights[rows, k].reshape((-1,) + (1,) * (table.ndim - 1))
-                out[rows] += w * table[slots[rows, k]]
+        out = np.empty((slots.shape[0],) + table.shape[1:], dtype=table.dtype)
+        _blend_rows(table.reshape(table.shape[0], -1), np.ascontiguousarray(slots, dtype=np.int64),
+                    np.ascontiguousarray(weights, dtype=float), out.reshape(slots.shape[0], -1))  # fmt: skip
         return out
 
     # ------------------------------------------------------------------ state
