@@ -87,6 +87,7 @@ __all__ = [
     "TRACKS",
     "FullCar",
     "corner_spectrum",
+    "blend_gain_at_delay",
     "gain_at_delay",
     "projected_terms",
     "static_forces",
@@ -369,6 +370,52 @@ def gain_at_delay(
     out = np.empty((pick.size, start.size))
     _band_gain(a2, b2, phase.real.copy(), phase.imag.copy(), start.astype(np.int64), pick, out)
     return out.reshape(lead + (start.size,)) if rows is None else out
+
+
+def blend_gain_at_delay(
+    a_sq: np.ndarray, cross: np.ndarray, f: np.ndarray, delay_s: float, band_start: np.ndarray,
+    targets: np.ndarray, tables: np.ndarray, weights: np.ndarray, out: np.ndarray,
+) -> None:
+    r"""Band-averaged gains at delay τ (:func:`gain_at_delay`) of stacked tables, blended and added in
+    place: for each i, ``out[targets[i]] += weights[i, k] * gain(table tables[i, k])`` for the k with a
+    positive weight, in order of k.
+
+    `a_sq` (S, …, F) float and `cross` (S, …, F) complex: S tables of :func:`projected_terms`'s terms,
+    C-contiguous; `band_start` (K,) int64 as :func:`gain_at_delay`'s (trusted: no checks); `targets`
+    (N,), `tables` and `weights` (N, L); `out` (T, …, K) float, C-contiguous. The same sums as
+    :func:`gain_at_delay` followed by the blend, bit for bit, without the picked rows' index array and
+    a Python loop over the (target, table) pairs (the online monitor calls this every update)."""
+    rows_per = int(np.prod(a_sq.shape[1:-1], dtype=np.int64))
+    phase = np.exp(2j * np.pi * f * float(delay_s))
+    _band_gain_blend(a_sq.reshape(-1, f.size), cross.reshape(-1, f.size), phase.real.copy(), phase.imag.copy(),
+                     band_start, rows_per, np.asarray(targets, dtype=np.int64),
+                     np.ascontiguousarray(tables, dtype=np.int64), np.ascontiguousarray(weights, dtype=float),
+                     out.reshape(out.shape[0] * rows_per, -1))  # fmt: skip
+
+
+@cached_njit
+def _band_gain_blend(a_sq, cross, cos_f, sin_f, band_start, rows_per, targets, tables, weights, out):
+    """out[targets[i] · rows_per + r, k] += weights[i, l] · (band k's mean of row tables[i, l] · rows_per + r
+    of :func:`_band_gain`'s gain), for each l with a positive weight, in order (:func:`blend_gain_at_delay`)."""
+    n_k, n_f = band_start.size, a_sq.shape[1]
+    row = np.empty(n_f)
+    for i in range(targets.size):
+        for m in range(tables.shape[1]):
+            w = weights[i, m]
+            if not w > 0.0:
+                continue
+            for q in range(rows_per):
+                r = tables[i, m] * rows_per + q
+                o = targets[i] * rows_per + q
+                for j in range(n_f):
+                    b = cross[r, j]
+                    row[j] = a_sq[r, j] + 2.0 * (b.real * cos_f[j] - b.imag * sin_f[j])
+                for k in range(n_k):
+                    j1 = band_start[k + 1] if k + 1 < n_k else n_f
+                    acc = 0.0
+                    for j in range(band_start[k], j1):
+                        acc += row[j]
+                    out[o, k] += w * (acc / (j1 - band_start[k]))
 
 
 @cached_njit

@@ -171,7 +171,7 @@ from scipy.interpolate import CubicSpline
 from scipy.special import ndtr
 
 from suvtwin.errors import InputError
-from suvtwin.estimators.full_car import gain_at_delay, projected_terms, wheel_responses
+from suvtwin.estimators.full_car import blend_gain_at_delay, projected_terms, wheel_responses
 from suvtwin.estimators.joint import N0, LinearQuarterCar, envelope_power, signal_direction, signal_gain
 from suvtwin.estimators.preview import PreviewConfig, PreviewTrack, fuse_track
 from suvtwin.estimators.quarter_car import stiffness_from_pressure
@@ -883,6 +883,7 @@ class TyreMonitor:
         n_single = first_above
         group[above] = n_single + (np.arange(fine.size - first_above) // per_group)
         self._group_start = np.flatnonzero(np.r_[True, np.diff(group) != 0])  # reduceat offsets
+        self._band_start = self._group_start.astype(np.int64)  # the same, as the compiled gains take them
         self._group_size = np.diff(np.r_[self._group_start, fine.size]).astype(float)
         self.freq = np.add.reduceat(fine, self._group_start) / self._group_size
         self._silent_bins = self.freq <= cfg.silent_band_hz * (1.0 + _FREQ_TOL)  # the body's band (_silent)
@@ -1459,15 +1460,9 @@ class TyreMonitor:
                 if self.models[c].full_car is not None:
                     by_wheelbase.setdefault(self.models[c].full_car.wheelbase, []).append(c)
                 by_contact.setdefault(self.models[c].envelope_half_length, []).append(c)
-            n_dg = shape[1] * shape[3]  # a slot's (damping, pressure) rows of the tables
             for wheelbase, same in by_wheelbase.items():
-                pairs = [(c, k) for c in same for k in range(table.shape[1]) if blend[c, k] > 0.0]
-                picked = np.concatenate([table[c, k] * n_dg + np.arange(n_dg) for c, k in pairs])
-                parts = gain_at_delay(self._car_a, self._car_b, self._fine, wheelbase / speed,
-                                      band_start=self._group_start, rows=picked).reshape(
-                    len(pairs), shape[1], shape[3], -1)  # fmt: skip
-                for (c, k), part in zip(pairs, parts, strict=True):
-                    gain[c] += blend[c, k] * part
+                blend_gain_at_delay(self._car_a, self._car_b, self._fine, wheelbase / speed, self._band_start,
+                                    np.array(same), table[same], blend[same], gain)  # fmt: skip
             # the tyre's enveloping filters the road it reads: once per contact length
             for half, same in by_contact.items():
                 if half > 0.0:
