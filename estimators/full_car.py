@@ -387,16 +387,17 @@ def blend_gain_at_delay(
     a Python loop over the (target, table) pairs (the online monitor calls this every update)."""
     rows_per = int(np.prod(a_sq.shape[1:-1], dtype=np.int64))
     phase = np.exp(2j * np.pi * f * float(delay_s))
-    _band_gain_blend(a_sq.reshape(-1, f.size), cross.reshape(-1, f.size), phase.real.copy(), phase.imag.copy(),
-                     band_start, rows_per, np.asarray(targets, dtype=np.int64),
+    _band_gain_blend(a_sq.reshape(-1, f.size), cross.reshape(-1, f.size), phase.real.copy(),
+                     phase.imag.copy(), band_start, rows_per, np.asarray(targets, dtype=np.int64),
                      np.ascontiguousarray(tables, dtype=np.int64), np.ascontiguousarray(weights, dtype=float),
                      out.reshape(out.shape[0] * rows_per, -1))  # fmt: skip
 
 
 @cached_njit
 def _band_gain_blend(a_sq, cross, cos_f, sin_f, band_start, rows_per, targets, tables, weights, out):
-    """out[targets[i] · rows_per + r, k] += weights[i, l] · (band k's mean of row tables[i, l] · rows_per + r
-    of :func:`_band_gain`'s gain), for each l with a positive weight, in order (:func:`blend_gain_at_delay`)."""
+    """out[targets[i] · rows_per + r, k] += weights[i, l] · (band k's mean of row
+    tables[i, l] · rows_per + r of :func:`_band_gain`'s gain), for each l with a positive weight, in
+    order (:func:`blend_gain_at_delay`)."""
     n_k, n_f = band_start.size, a_sq.shape[1]
     row = np.empty(n_f)
     for i in range(targets.size):

@@ -902,6 +902,7 @@ class TyreMonitor:
         n_coarse = max(int(math.ceil((p_hi - p_lo) / cfg.grid_step_kpa - 1e-9)) + 1, 4)
         self._p_coarse = np.linspace(p_lo, p_hi, n_coarse)
         self._p_grid = np.linspace(p_lo, p_hi, int(round(p_hi - p_lo)) + 1)
+        self._p_edges = np.r_[self._p_grid[0] - 0.5, self._p_grid + 0.5]  # the 1 kPa cells' edges (_moments)
         # a cubic spline through the coarse grid, as a matrix (fine, coarse): linear in the values
         self._to_fine = CubicSpline(self._p_coarse, np.eye(n_coarse))(self._p_grid)
         # waviness grid: w = 2 (the spike) and the slab's points, with their prior log weights
@@ -963,6 +964,20 @@ class TyreMonitor:
         for c in range(n_c):
             self._slot(c, 0)
         self._nonlinear = any(qc.suspension is not None for qc in self.models)
+        # per corner, what _tables_for reads of its model every update: the spring rate (N/m), whether it
+        # has a suspension law, the masses (kg), the tyre's static load (N: the car's weight shared by
+        # its centre of gravity, else (m_s + m_us) g) and the stops' clearances (m; inf without a law)
+        self._corner_rate = np.array([qc.spring_rate for qc in self.models], dtype=float)
+        self._corner_has_law = np.array([qc.suspension is not None for qc in self.models], dtype=bool)
+        self._corner_sprung = np.array([qc.sprung_mass for qc in self.models], dtype=float)
+        self._corner_unsprung = np.array([qc.unsprung_mass for qc in self.models], dtype=float)
+        self._corner_static_load = np.array(
+            [(qc.sprung_mass + qc.unsprung_mass) * _GRAVITY if qc.static_load is None else qc.static_load
+             for qc in self.models], dtype=float)  # fmt: skip
+        self._corner_bump = np.array([qc.suspension.bump_clearance if qc.suspension else np.inf
+                                      for qc in self.models], dtype=float)  # fmt: skip
+        self._corner_rebound = np.array([qc.suspension.rebound_clearance if qc.suspension else np.inf
+                                         for qc in self.models], dtype=float)  # fmt: skip
         self.tracks = tuple((int(f), int(r)) for f, r in tracks)
         used = [c for pair in self.tracks for c in pair]
         if self.tracks and (wheelbase_m is None or any(not 0 <= c < n_c for c in used)
@@ -1075,11 +1090,11 @@ class TyreMonitor:
         weights = np.zeros(slots.shape)
         weights[:, 0] = 1.0
         share = np.zeros(corners.shape)
-        rate = np.array([self.models[c].spring_rate for c in corners.ravel()]).reshape(corners.shape)
+        rate = self._corner_rate[corners]
         touch = np.ones(corners.shape)
         if not self._nonlinear:
             return slots, weights, share, rate, touch
-        has_law = np.array([self.models[c].suspension is not None for c in corners], dtype=bool)
+        has_law = self._corner_has_law[corners]
         if not has_law.any():
             return slots, weights, share, rate, touch
         rel = spec[..., 0].real + spec[..., 1].real - 2.0 * spec[..., 2].real  # S of a_s − a_u
@@ -1090,12 +1105,10 @@ class TyreMonitor:
         # every corner at once (the corners' masses, travels and clearances as arrays), one
         # equivalent-rate call per suspension law
         at = [self.models[c] for c in corners]
-        ms = np.array([qc.sprung_mass for qc in at])[:, None]
-        mu = np.array([qc.unsprung_mass for qc in at])[:, None]
+        ms, mu = self._corner_sprung[corners][:, None], self._corner_unsprung[corners][:, None]
         load = ms**2 * spec[..., 0].real + mu**2 * spec[..., 1].real + 2.0 * ms * mu * spec[..., 2].real
         var_f = np.maximum(load - (ms**2 + mu**2) * self.noise, 0.0) @ self._band_df
-        weight = np.array([(qc.sprung_mass + qc.unsprung_mass) * _GRAVITY if qc.static_load is None
-                           else qc.static_load for qc in at])  # the tyre's static load, N  # fmt: skip
+        weight = self._corner_static_load[corners]
         contact = ndtr(weight / np.sqrt(np.maximum(var_f, 1e-12)))
         sd = np.sqrt(var_x)
         mean, k_eq = np.zeros(corners.size), rate.copy()
@@ -1105,8 +1118,7 @@ class TyreMonitor:
             mean[same], k_eq[same] = equivalent_spring_rate(law, static, sd[same], np.sqrt(var_v[same]))
         steps, step_w = _lattice(np.log(np.maximum(k_eq / rate, 1e-3)) / log_step)
         lifts, lift_w = _lattice(-np.log(np.maximum(contact, 0.05)) / log_step)
-        bump = np.array([qc.suspension.bump_clearance if qc.suspension else np.inf for qc in at])
-        rebound = np.array([qc.suspension.rebound_clearance if qc.suspension else np.inf for qc in at])
+        bump, rebound = self._corner_bump[corners], self._corner_rebound[corners]
         stops = ndtr((mean - bump) / np.maximum(sd, 1e-9)) + ndtr((-mean - rebound) / np.maximum(sd, 1e-9))
         for i in np.flatnonzero(has_law):
             for k, (a, b) in enumerate(((0, 0), (1, 0), (0, 1), (1, 1))):
@@ -1294,16 +1306,10 @@ class TyreMonitor:
                 row[where] = med[r]
                 self._state.counts["despiked"][r % n_c] += where.size
                 spiky[r] = False
-        for c in range(n_c):
-            rows = [c, n_c + c]
-            if not np.all(finite[rows]):
-                status[c] = _GAP
-            elif np.any(implausible[rows]):
-                status[c] = _IMPLAUSIBLE
-            elif np.any(clipped[rows]):
-                status[c] = _CLIPPED
-            elif np.any(spiky[rows]):
-                status[c] = _SPIKE
+        # each corner's first problem over its two rows (sprung c, unsprung n_c + c), in this order
+        problems = [~(finite[:n_c] & finite[n_c:]), implausible[:n_c] | implausible[n_c:],
+                    clipped[:n_c] | clipped[n_c:], spiky[:n_c] | spiky[n_c:]]  # fmt: skip
+        status[:] = np.select(problems, [_GAP, _IMPLAUSIBLE, _CLIPPED, _SPIKE], _USED)
         if not np.all(np.isfinite(v)) or np.min(v) < 0.0:
             status[:] = _SPEED
         return status
@@ -1598,7 +1604,7 @@ class TyreMonitor:
         p_mean = p_marg @ self._p_grid
         p_var = np.maximum(p_marg @ self._p_grid**2 - p_mean**2, 0.0)
         # quantiles: each grid value's mass spread over its 1 kPa cell, the CDF linear within it
-        edges = np.r_[self._p_grid[0] - 0.5, self._p_grid + 0.5]
+        edges = self._p_edges
         cdf = np.concatenate([np.zeros((p_marg.shape[0], 1)), np.cumsum(p_marg, axis=1)], axis=1)
         cdf /= cdf[:, -1:]
         p_tails = np.array([np.interp(TAIL_LEVELS, row, edges) for row in cdf])
