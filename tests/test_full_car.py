@@ -10,6 +10,7 @@ import pytest
 from suvtwin.errors import InputError
 from suvtwin.estimators.full_car import (
     FullCar,
+    blend_gain_at_delay,
     corner_spectrum,
     gain_at_delay,
     projected_terms,
@@ -317,3 +318,25 @@ def test_gain_at_delay_averaged_over_bands_and_picked_rows_is_the_mean_of_its_fr
     np.testing.assert_allclose(got, banded.reshape(15, -1)[rows], rtol=1e-13)
     with pytest.raises(InputError, match="band_start"):
         gain_at_delay(a_sq, cross, f, 0.17, band_start=np.array([1, 5]))
+
+
+def test_blend_gain_at_delay_adds_the_blended_band_gains_bit_for_bit():
+    # the monitor's blend of gain tables at the window's delay: the same sums as gain_at_delay's
+    # band means, weighted and added in order of the weights, skipping zero weights
+    rng = np.random.default_rng(6)
+    f = np.linspace(0.5, 20.0, 40)
+    a_sq = rng.random((4, 3, 5, f.size))
+    cross = rng.standard_normal(a_sq.shape) + 1j * rng.standard_normal(a_sq.shape)
+    start = np.array([0, 1, 2, 6, 10, 25, 39])
+    banded = gain_at_delay(a_sq, cross, f, 0.17, band_start=start)  # (4, 3, 5, K)
+    targets = np.array([2, 0])
+    tables = np.array([[3, 1, 0], [2, 2, 1]])
+    weights = np.array([[0.25, 0.0, 0.75], [0.5, 0.5, 0.0]])
+    out = rng.random((3, 3, 5, start.size))
+    want = out.copy()
+    for i, c in enumerate(targets):
+        for k in range(tables.shape[1]):
+            if weights[i, k] > 0.0:
+                want[c] += weights[i, k] * banded[tables[i, k]]
+    blend_gain_at_delay(a_sq, cross, f, 0.17, start.astype(np.int64), targets, tables, weights, out)
+    np.testing.assert_array_equal(out, want)
