@@ -419,7 +419,7 @@ def monitor_run(
     if i != axis.n:
         raise InputError(f"run file {str(path)!r}: its columns hold {i} rows against {axis.n} of t_s")
     update = MonitorUpdate.concatenate(parts)
-    rule = rule or DeflationRule()
+    rule = rule or DeflationRule(informed_sigma_kpa=config.observable_sigma_kpa)
     evidence = None
     if analysis is not None:
         rows = RadiusUpdate.concatenate(radius_rows, len(CORNERS))

@@ -572,3 +572,26 @@ def test_a_stopped_car_s_wheels_rocking_about_zero_are_not_silent_sensors():
     ra.update(t[n // 2 :], moving, zero[n // 2 :], zero[n // 2 :], zero[n // 2 :])
     assert ra.silent_wheel_samples.tolist() == [0, 0, 0, n // 2]
     assert ra.alive.tolist() == [True, True, True, False]
+
+
+def test_a_fused_estimate_too_wide_to_be_observable_does_not_confirm_a_warning():
+    from suvtwin.estimators.deflation import DeflationRule, deflation_warnings
+
+    # the first update (half a window) reads every tyre 100 kPa below a 230 kPa placard at σ 40 kPa,
+    # the next (the whole window, which holds the first one's data) 70 kPa below at σ 15, then the
+    # data put them back at 230: the radii see the four alike (a shared error, not a loss). Fused,
+    # the first update's σ is the four's common mode, above the monitor's 25 kPa observability
+    # limit: it must not count as one of the two updates that confirm a warning
+    t = np.array([4.0, 8.0, 12.0])
+    p = np.array([[130.0] * 4, [160.0] * 4, [230.0] * 4])
+    sig = np.array([[40.0] * 4, [15.0] * 4, [10.0] * 4])
+    obs = sig <= 25.0
+    tracks = ((0, 2), (1, 3))
+    ev = _evidence(3, np.zeros(4), np.full(4, 0.2e-3), 0.1e-3, placard=230.0)
+    w = deflation_warnings(t, p, sig, obs, placard_kpa=230.0, tracks=tracks, radius=ev)
+    assert np.all(w.fused_sigma_kpa[0] > 25.0) and np.all(w.probability[:2] >= 0.95)
+    assert np.isnan(w.warning_time_s).all()
+    # counted at any σ (the limit set beyond it), the first two updates warn every tyre at 8 s
+    loose = deflation_warnings(t, p, sig, obs, placard_kpa=230.0, tracks=tracks, radius=ev,
+                               rule=DeflationRule(informed_sigma_kpa=1e3))  # fmt: skip
+    assert np.all(loose.warning_time_s == 8.0)
