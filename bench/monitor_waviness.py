@@ -12,10 +12,10 @@ and ``free`` (uniform on 1.5–3). Printed per w and prior: the error at 10 s an
 over all tyres) and the share of updates after 2 s within ±2σ, of the vibration estimate and of
 the estimate fused with the wheels' radii (:func:`suvtwin.pipeline.monitor_scoring.score_set`); and
 the would-be false warnings: tyres (all at a constant pressure) whose fused estimate put the
-probability of being more than 12.5 % below their true pressure at 0.95 or more on two updates in a
-row (the deflation rule's threshold and confirmation, :class:`suvtwin.estimators.deflation.DeflationRule`,
-with each tyre's reference its truth and the fused estimate taken as Gaussian), and the highest
-such probability held on two updates.
+probability of being more than the rule's loss (10 %) below their true pressure at 0.95 or more on
+two updates in a row (the deflation rule's threshold and confirmation,
+:class:`suvtwin.estimators.deflation.DeflationRule`, with each tyre's reference its truth and the
+fused estimate taken as Gaussian), and the highest such probability held on two updates.
 """
 
 from __future__ import annotations

@@ -273,9 +273,10 @@ def test_warning_on_a_placard_loss_with_time_and_evidence():
     # 230 kPa placard; the tyre reads 230 for 20 s, then 180 (22 % low) with σ 5 kPa
     t, p, s, obs = _rows([230.0] * 10 + [180.0] * 10, 5.0)
     w = deflation_warnings(t, p, s, obs, placard_kpa=230.0)
-    # P(p < 0.875·230 = 201.25) = Φ((201.25 − 180)/5) = Φ(4.25) = 0.9999893; confirmed on the 2nd such row
+    # the rule's 10 %: P(p < 0.9·230 = 207) = Φ((207 − 180)/5) = Φ(5.4) = 1 − 3.33e-8; confirmed on the
+    # 2nd such row
     assert w.warning_time_s[0] == t[11]
-    assert w.warning_probability[0] == pytest.approx(0.9999893, abs=1e-6)
+    assert w.warning_probability[0] == pytest.approx(1.0 - 3.332e-8, abs=1e-10)
     # with the 15 % rule: Φ((195.5 − 180)/5) = Φ(3.1) = 0.99903
     w15 = deflation_warnings(t, p, s, obs, placard_kpa=230.0, rule=DeflationRule(detect_fraction=0.15))
     assert w15.warning_probability[0] == pytest.approx(0.99903, abs=1e-5)
@@ -294,26 +295,32 @@ def test_no_warning_at_nominal_pressure_or_when_not_observable():
     assert not np.any(w.warning)
 
 
+# the hand-worked numbers of the tests below take a 12.5 % loss (0.875·230 = 201.25 kPa)
+AT_12_5 = DeflationRule(detect_fraction=0.125)
+
+
 def test_warning_from_the_posteriors_upper_tail():
     # a posterior at 190 kPa with σ 8 but its 95 % quantile at 199 (a narrow core and a skirt):
     # against the 201.25 kPa threshold, σ alone gives Φ(11.25/8) = 0.920 (no warning), the tail
     # (199 − 190)/1.645 = 5.47 gives Φ(11.25/5.47) = 0.980
     t, p, s, obs = _rows([190.0] * 5, 8.0)
     upper = np.full(p.shape, 199.0)
-    by_sigma = deflation_warnings(t, p, s, obs, placard_kpa=230.0)
-    by_tail = deflation_warnings(t, p, s, obs, placard_kpa=230.0, upper_kpa=upper)
+    by_sigma = deflation_warnings(t, p, s, obs, placard_kpa=230.0, rule=AT_12_5)
+    by_tail = deflation_warnings(t, p, s, obs, placard_kpa=230.0, upper_kpa=upper, rule=AT_12_5)
     assert by_sigma.probability[0, 0] == pytest.approx(0.9203, abs=1e-3)
     assert not np.any(by_sigma.warning)
     assert by_tail.probability[0, 0] == pytest.approx(0.9801, abs=1e-3)
     assert by_tail.warning_time_s[0] == t[1]
     # exact at the decision: the quantile at the threshold gives the rule's probability
-    at = deflation_warnings(t, p, s, obs, placard_kpa=230.0, upper_kpa=np.full(p.shape, 0.875 * 230.0))
+    at = deflation_warnings(t, p, s, obs, placard_kpa=230.0, upper_kpa=np.full(p.shape, 0.875 * 230.0),
+                          rule=AT_12_5)
     assert at.probability[0, 0] == pytest.approx(0.95, abs=1e-9)
     # a degenerate tail (at or below the estimate) falls back to σ
-    flat = deflation_warnings(t, p, s, obs, placard_kpa=230.0, upper_kpa=p.copy())
+    flat = deflation_warnings(t, p, s, obs, placard_kpa=230.0, upper_kpa=p.copy(), rule=AT_12_5)
     np.testing.assert_allclose(flat.probability, by_sigma.probability)
     with pytest.raises(ValueError, match="upper_level"):
-        deflation_warnings(t, p, s, obs, placard_kpa=230.0, upper_kpa=upper, upper_level=0.4)
+        deflation_warnings(t, p, s, obs, placard_kpa=230.0, upper_kpa=upper, upper_level=0.4,
+                           rule=AT_12_5)
 
 
 def test_common_loss_of_all_four_tyres_warns_where_each_alone_cannot():
@@ -324,14 +331,14 @@ def test_common_loss_of_all_four_tyres_warns_where_each_alone_cannot():
     # all four are warned, by the common loss, on the second update
     t, p, s, obs = _rows(np.full((6, 4), 184.0), 12.0)
     tracks = ((0, 2), (1, 3))
-    w = deflation_warnings(t, p, s, obs, placard_kpa=230.0, tracks=tracks)
+    w = deflation_warnings(t, p, s, obs, placard_kpa=230.0, tracks=tracks, rule=AT_12_5)
     expected = 0.5 * math.erfc(-(17.25 / 230.0) / (12.0 / 230.0 * math.sqrt(0.5125)) / math.sqrt(2.0))
     np.testing.assert_allclose(w.common_probability, expected, rtol=1e-9)
     assert expected > 0.95 and np.all(w.probability < 0.95)
     assert np.all(w.warning_time_s == t[1]) and np.all(w.warning_common)
     # without the common test, none is warned
     alone = deflation_warnings(t, p, s, obs, placard_kpa=230.0, tracks=tracks,
-                               rule=DeflationRule(common_alpha=None))  # fmt: skip
+                               rule=DeflationRule(detect_fraction=0.125, common_alpha=None))  # fmt: skip
     assert np.all(np.isnan(alone.common_probability)) and np.all(np.isnan(alone.warning_time_s))
 
 
@@ -339,7 +346,7 @@ def test_common_loss_is_not_taken_where_the_tyres_differ():
     # one tyre 30 % low (161 kPa), three at the 230 kPa placard, σ 8 kPa: one relative pressure cannot
     # explain them (χ² ≫ its 3 degrees of freedom), so only the low tyre is warned, by its own estimate
     t, p, s, obs = _rows(np.tile([161.0, 230.0, 230.0, 230.0], (6, 1)), 8.0)
-    w = deflation_warnings(t, p, s, obs, placard_kpa=230.0, tracks=((0, 2), (1, 3)))
+    w = deflation_warnings(t, p, s, obs, placard_kpa=230.0, tracks=((0, 2), (1, 3)), rule=AT_12_5)
     assert np.all(np.isnan(w.common_probability))
     assert np.isfinite(w.warning_time_s[0]) and not w.warning_common[0]
     assert np.all(np.isnan(w.warning_time_s[1:]))
@@ -348,12 +355,13 @@ def test_common_loss_is_not_taken_where_the_tyres_differ():
     t, p, s, obs = _rows(np.tile([190.0, 196.0, 193.0], (3, 1)), 6.0)
     for rho in (0.0, 0.6):
         w = deflation_warnings(t, p, s, obs, placard_kpa=230.0,
-                               rule=DeflationRule(track_correlation=rho, cross_correlation=0.0))  # fmt: skip
+                               rule=DeflationRule(detect_fraction=0.125, track_correlation=rho,
+                                                 cross_correlation=0.0))  # fmt: skip
         z = (201.25 - 193.0) / (6.0 * math.sqrt((1.0 + 2.0 * rho) / 3.0))
         np.testing.assert_allclose(w.common_probability, 0.5 * math.erfc(-z / math.sqrt(2.0)), rtol=1e-9)
     # the car's loss needs every tyre with a reference observable, and three of them
     obs[:, 2] = False
-    w = deflation_warnings(t, p, s, obs, placard_kpa=230.0)
+    w = deflation_warnings(t, p, s, obs, placard_kpa=230.0, rule=AT_12_5)
     assert np.all(np.isnan(w.common_probability))
 
 
@@ -361,7 +369,8 @@ def test_learned_reference_after_reset():
     # reset at 10 s; learned once observable for 60 s with σ ≤ 8 kPa; then a leak to 170 kPa
     rows = [240.0] * 50 + list(np.linspace(240, 170, 20)) + [170.0] * 20
     t, p, s, obs = _rows(rows, 5.0)
-    w = deflation_warnings(t, p, s, obs, reset_at_s=10.0, rule=DeflationRule(learn_s=60.0))
+    w = deflation_warnings(t, p, s, obs, reset_at_s=10.0,
+                           rule=DeflationRule(detect_fraction=0.125, learn_s=60.0))
     first = np.flatnonzero(np.isfinite(w.reference_kpa[:, 0]))[0]
     assert t[first] >= 10.0 + 60.0
     assert w.reference_kpa[first, 0] == 240.0

@@ -404,7 +404,9 @@ def test_fusion_is_blind_to_a_loss_all_four_share_and_honest_in_monte_carlo():
 
 
 def test_the_radii_let_the_common_loss_take_a_tyre_whose_windows_were_refused():
-    from suvtwin.estimators.deflation import deflation_warnings
+    from suvtwin.estimators.deflation import DeflationRule, deflation_warnings
+
+    rule = DeflationRule(detect_fraction=0.125)  # the numbers below take a 12.5 % loss
 
     # all four 20 % below a 230 kPa placard (184 kPa); three read at 184 with σ 12 kPa, the rear
     # right's windows refused (not observable, at its prior 230 ± 80). Alone each observable tyre has
@@ -415,13 +417,14 @@ def test_the_radii_let_the_common_loss_take_a_tyre_whose_windows_were_refused():
     sig = np.tile([12.0, 12.0, 12.0, 80.0], (n_k, 1))
     obs = np.tile([True, True, True, False], (n_k, 1))
     tracks = ((0, 2), (1, 3))
-    assert np.isnan(deflation_warnings(t, p, sig, obs, placard_kpa=230.0, tracks=tracks).warning_time_s).all()
+    alone = deflation_warnings(t, p, sig, obs, placard_kpa=230.0, tracks=tracks, rule=rule)
+    assert np.isnan(alone.warning_time_s).all()
     # the radii read all four alike (a shared loss leaves every excess 0): the fused estimates with
     # their covariance. The model is linear with one gain for all, so a common r moves no excess and
     # the common fit's estimate is the generalized least squares mean of the four vibration
     # estimates, the refused one at its σ (Aitken 1935): computed here from the vibration alone
     ev = _evidence(n_k, np.zeros(4), np.full(4, 0.2e-3), 0.1e-3, placard=230.0)
-    w = deflation_warnings(t, p, sig, obs, placard_kpa=230.0, tracks=tracks, radius=ev)
+    w = deflation_warnings(t, p, sig, obs, placard_kpa=230.0, tracks=tracks, radius=ev, rule=rule)
     rho = np.full((4, 4), 0.15)
     rho[0, 2] = rho[2, 0] = rho[1, 3] = rho[3, 1] = 0.75
     np.fill_diagonal(rho, 1.0)
@@ -436,12 +439,14 @@ def test_the_radii_let_the_common_loss_take_a_tyre_whose_windows_were_refused():
     d = np.array([-46.0e-4, 0.0, 0.0, 0.0])
     ev = _evidence(n_k, d - (d.sum() - d) / 3, np.full(4, 0.2e-3), 0.1e-3, placard=230.0)
     one = np.tile([184.0, 230.0, 230.0, 230.0], (n_k, 1))
-    w = deflation_warnings(t, one, sig, obs, placard_kpa=230.0, tracks=tracks, radius=ev)
+    w = deflation_warnings(t, one, sig, obs, placard_kpa=230.0, tracks=tracks, radius=ev, rule=rule)
     assert np.isnan(w.common_probability).all() and np.isnan(w.warning_time_s[1:]).all()
 
 
 def test_the_radii_keep_a_one_sided_loss_from_the_car_s_common_loss():
-    from suvtwin.estimators.deflation import deflation_warnings
+    from suvtwin.estimators.deflation import DeflationRule, deflation_warnings
+
+    rule = DeflationRule(detect_fraction=0.125)  # the numbers below take a 12.5 % loss
 
     # the left front and rear 20 % below a 230 kPa placard (184 kPa), the right at it; the vibration
     # reads every tyre low (178 / 196 kPa, σ 12 kPa), as a shared error of a track would. Its own
@@ -451,20 +456,20 @@ def test_the_radii_keep_a_one_sided_loss_from_the_car_s_common_loss():
     t = np.arange(1, n_k + 1) * 4.0
     p = np.tile([178.0, 196.0, 178.0, 196.0], (n_k, 1))
     sig, obs, tracks = np.full((n_k, 4), 12.0), np.ones((n_k, 4), bool), ((0, 2), (1, 3))
-    alone = deflation_warnings(t, p, sig, obs, placard_kpa=230.0, tracks=tracks)
+    alone = deflation_warnings(t, p, sig, obs, placard_kpa=230.0, tracks=tracks, rule=rule)
     assert np.all(alone.common_probability > 0.95) and np.isfinite(alone.warning_time_s).all()
     # the radii see the two left tyres 46 kPa below the right ones (0.1 ‰/kPa, σ 0.2 ‰ per wheel):
     # against their contrasts one relative pressure fails, and only the left tyres are warned
     d = np.array([-46.0e-4, 0.0, -46.0e-4, 0.0])
     ev = _evidence(n_k, d - (d.sum() - d) / 3, np.full(4, 0.2e-3), 0.1e-3, placard=230.0)
-    w = deflation_warnings(t, p, sig, obs, placard_kpa=230.0, tracks=tracks, radius=ev)
+    w = deflation_warnings(t, p, sig, obs, placard_kpa=230.0, tracks=tracks, radius=ev, rule=rule)
     assert np.isnan(w.common_probability).all()
     assert np.isfinite(w.warning_time_s[[0, 2]]).all() and np.isnan(w.warning_time_s[[1, 3]]).all()
     # all four alike, the radii saying so: the common loss stands, as the vibration's fit has it
     even = np.full((n_k, 4), 184.0)
     ev = _evidence(n_k, np.zeros(4), np.full(4, 0.2e-3), 0.1e-3, placard=230.0)
-    w = deflation_warnings(t, even, sig, obs, placard_kpa=230.0, tracks=tracks, radius=ev)
-    by_vibration = deflation_warnings(t, even, sig, obs, placard_kpa=230.0, tracks=tracks)
+    w = deflation_warnings(t, even, sig, obs, placard_kpa=230.0, tracks=tracks, radius=ev, rule=rule)
+    by_vibration = deflation_warnings(t, even, sig, obs, placard_kpa=230.0, tracks=tracks, rule=rule)
     np.testing.assert_allclose(w.common_probability, by_vibration.common_probability, rtol=1e-12)
     assert np.all(w.common_probability > 0.95)
 
