@@ -394,12 +394,30 @@ def blend_gain_at_delay(
 
 
 @cached_njit
+def _row_band_means(a_sq, cross, cos_f, sin_f, band_start, r, row, means):
+    """means[k] = mean over band k's frequencies j of a_sq[r, j] + 2 Re(cross[r, j] e^{iφ_j}),
+    e^{iφ} = cos_f + i sin_f; `row` (F,) is scratch. The row's gain is taken over all frequencies in
+    one straight loop (which the compiler vectorizes), then averaged per band: 1.3 times faster than
+    summing band by band, the same sums."""
+    n_k, n_f = band_start.size, a_sq.shape[1]
+    for j in range(n_f):
+        b = cross[r, j]
+        row[j] = a_sq[r, j] + 2.0 * (b.real * cos_f[j] - b.imag * sin_f[j])
+    for k in range(n_k):
+        j1 = band_start[k + 1] if k + 1 < n_k else n_f
+        acc = 0.0
+        for j in range(band_start[k], j1):
+            acc += row[j]
+        means[k] = acc / (j1 - band_start[k])
+
+
+@cached_njit
 def _band_gain_blend(a_sq, cross, cos_f, sin_f, band_start, rows_per, targets, tables, weights, out):
     """out[targets[i] · rows_per + r, k] += weights[i, l] · (band k's mean of row
     tables[i, l] · rows_per + r of :func:`_band_gain`'s gain), for each l with a positive weight, in
     order (:func:`blend_gain_at_delay`)."""
-    n_k, n_f = band_start.size, a_sq.shape[1]
-    row = np.empty(n_f)
+    row = np.empty(a_sq.shape[1])
+    means = np.empty(band_start.size)
     for i in range(targets.size):
         for m in range(tables.shape[1]):
             w = weights[i, m]
@@ -407,37 +425,19 @@ def _band_gain_blend(a_sq, cross, cos_f, sin_f, band_start, rows_per, targets, t
                 continue
             for q in range(rows_per):
                 r = tables[i, m] * rows_per + q
+                _row_band_means(a_sq, cross, cos_f, sin_f, band_start, r, row, means)
                 o = targets[i] * rows_per + q
-                for j in range(n_f):
-                    b = cross[r, j]
-                    row[j] = a_sq[r, j] + 2.0 * (b.real * cos_f[j] - b.imag * sin_f[j])
-                for k in range(n_k):
-                    j1 = band_start[k + 1] if k + 1 < n_k else n_f
-                    acc = 0.0
-                    for j in range(band_start[k], j1):
-                        acc += row[j]
-                    out[o, k] += w * (acc / (j1 - band_start[k]))
+                for k in range(band_start.size):
+                    out[o, k] += w * means[k]
 
 
 @cached_njit
 def _band_gain(a_sq, cross, cos_f, sin_f, band_start, rows, out):
     """out[i, k] = mean over band k's frequencies j of a_sq[rows[i], j] + 2 Re(cross[rows[i], j] e^{iφ_j}),
-    e^{iφ} = cos_f + i sin_f (:func:`gain_at_delay`). Each row's gain is taken over all frequencies
-    in one straight loop (which the compiler vectorizes), then averaged per band: 1.3 times faster
-    than summing band by band, the same sums."""
-    n_k, n_f = band_start.size, a_sq.shape[1]
-    row = np.empty(n_f)
+    e^{iφ} = cos_f + i sin_f (:func:`gain_at_delay`; :func:`_row_band_means`)."""
+    row = np.empty(a_sq.shape[1])
     for i in range(rows.size):
-        r = rows[i]
-        for j in range(n_f):
-            b = cross[r, j]
-            row[j] = a_sq[r, j] + 2.0 * (b.real * cos_f[j] - b.imag * sin_f[j])
-        for k in range(n_k):
-            j1 = band_start[k + 1] if k + 1 < n_k else n_f
-            acc = 0.0
-            for j in range(band_start[k], j1):
-                acc += row[j]
-            out[i, k] = acc / (j1 - band_start[k])
+        _row_band_means(a_sq, cross, cos_f, sin_f, band_start, rows[i], row, out[i])
 
 
 def corner_spectrum(
