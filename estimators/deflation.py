@@ -180,7 +180,7 @@ class DeflationRule:
         A row where the tyre is not observable but its estimate is fused with the radii counts
         toward the confirmation only where the fused σ is at most this, kPa: the monitor's own
         observability limit (``MonitorConfig.observable_sigma_kpa``, 25 kPa; the pipeline passes
-        the monitor's). Counted at any σ, the first update (half a window, σ 30–40 kPa) confirmed
+        the monitor's). Counted at any σ, the first update (half a window, fused σ 27 kPa) confirmed
         the second, whose window holds its data: on the MuJoCo ``warning`` runs 200–299 a class A
         run at 105 km/h, every tyre read 50–75 kPa low over its first 8 s (the road's realization),
         warned an inflated tyre at 8 s.
