@@ -882,8 +882,8 @@ class TyreMonitor:
         first_above = int(np.argmax(above)) if np.any(above) else fine.size
         n_single = first_above
         group[above] = n_single + (np.arange(fine.size - first_above) // per_group)
-        self._group_start = np.flatnonzero(np.r_[True, np.diff(group) != 0])  # reduceat offsets
-        self._band_start = self._group_start.astype(np.int64)  # the same, as the compiled gains take them
+        # reduceat offsets, int64 as the compiled gains take them
+        self._group_start = np.flatnonzero(np.r_[True, np.diff(group) != 0]).astype(np.int64)
         self._group_size = np.diff(np.r_[self._group_start, fine.size]).astype(float)
         self.freq = np.add.reduceat(fine, self._group_start) / self._group_size
         self._silent_bins = self.freq <= cfg.silent_band_hz * (1.0 + _FREQ_TOL)  # the body's band (_silent)
@@ -1467,8 +1467,9 @@ class TyreMonitor:
                     by_wheelbase.setdefault(self.models[c].full_car.wheelbase, []).append(c)
                 by_contact.setdefault(self.models[c].envelope_half_length, []).append(c)
             for wheelbase, same in by_wheelbase.items():
-                blend_gain_at_delay(self._car_a, self._car_b, self._fine, wheelbase / speed, self._band_start,
-                                    np.array(same), table[same], blend[same], gain)  # fmt: skip
+                blend_gain_at_delay(self._car_a, self._car_b, self._fine, wheelbase / speed,
+                                    self._group_start, np.array(same), table[same], blend[same],
+                                    gain)  # fmt: skip
             # the tyre's enveloping filters the road it reads: once per contact length
             for half, same in by_contact.items():
                 if half > 0.0:
