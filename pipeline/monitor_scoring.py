@@ -58,6 +58,7 @@ class MonitorTrace:
     fused_hat, fused_sigma : (K, 4) or None, the pressure fused with the radius analysis and its σ
     (NaN where not fused); relative_probability : (K, 4) or None, the radii's probability that the
     tyre lost more than the others since their calibration (learned references; NaN before).
+    track_coherence : (K,) or None, the left and right tracks' road coherence the monitor used.
     """
 
     t_s: np.ndarray
@@ -73,6 +74,7 @@ class MonitorTrace:
     fused_hat: np.ndarray | None = None
     fused_sigma: np.ndarray | None = None
     relative_probability: np.ndarray | None = None
+    track_coherence: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         T, K = np.shape(self.t_s)[0], np.shape(self.t_est)[0]
@@ -80,7 +82,7 @@ class MonitorTrace:
                             ("sigma", (K, 4)), ("observable", (K, 4)), ("warning", (K, 4)),
                             ("loss_probability", (K, 4)), ("common_probability", (K,)),
                             ("fused_hat", (K, 4)), ("fused_sigma", (K, 4)),
-                            ("relative_probability", (K, 4))):  # fmt: skip
+                            ("relative_probability", (K, 4)), ("track_coherence", (K,))):  # fmt: skip
             if getattr(self, name) is None:
                 continue
             got = np.shape(getattr(self, name))
@@ -145,6 +147,11 @@ def monitor_trace(run: Mapping, monitor: Mapping) -> MonitorTrace:
         relative_probability=(
             per_tyre(monitor, "relative_loss_probability", "monitor")
             if all(f"{c}_relative_loss_probability" in monitor for c in CORNERS)
+            else None
+        ),
+        track_coherence=(
+            col(monitor, "track_coherence_hat", "monitor").astype(float)
+            if "track_coherence_hat" in monitor
             else None
         ),
     )

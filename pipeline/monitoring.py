@@ -335,7 +335,8 @@ def monitor_run(
     ``used`` or why skipped), ``{c}_reference_kpa``, ``{c}_loss_probability``, ``{c}_warning``
     (latched), ``{c}_spring_rate_npm`` and ``{c}_tyre_contact`` (the suspension rate and tyre contact
     share the window was analysed with: :class:`~suvtwin.estimators.monitor.MonitorUpdate`), and the
-    shared ``road_level_hat_m3``, ``waviness_hat`` and ``common_loss_probability`` (the observable
+    shared ``road_level_hat_m3``, ``waviness_hat``, ``track_coherence_hat`` (the left and right
+    tracks' road coherence the monitor estimated) and ``common_loss_probability`` (the observable
     tyres' shared loss, :func:`~suvtwin.estimators.deflation.deflation_warnings`). `preview`: fuse
     each rear tyre with the front→rear preview of its track (:func:`monitor_signals`).
     `corner_model`: how each corner's spectrum is modelled, :data:`CORNER_MODELS`. `radius`: with all
@@ -457,6 +458,7 @@ def monitor_run(
     columns["common_loss_probability"] = warn.common_probability
     columns["road_level_hat_m3"] = update.road_level
     columns["waviness_hat"] = update.waviness
+    columns["track_coherence_hat"] = update.track_coherence
     counts = monitor.counts
     metadata = {
         "run_file": str(path),
