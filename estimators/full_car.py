@@ -93,6 +93,7 @@ from suvtwin.jit import cached_njit
 __all__ = [
     "TRACKS",
     "FullCar",
+    "axle_coherence_parts",
     "axle_coherence_terms",
     "corner_spectrum",
     "blend_gain_at_delay",
@@ -366,6 +367,39 @@ def projected_cross_terms(h: np.ndarray, u1: np.ndarray, u2: np.ndarray) -> tupl
     return 2.0 * np.real(a_l * np.conj(a_r) + b_l * np.conj(b_r)), a_l * np.conj(b_r) + a_r * np.conj(b_l)
 
 
+def axle_coherence_parts(
+    f: npt.ArrayLike, car: FullCar, *, speed_mps: float | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    r"""Speed-free parts of :func:`axle_coherence_terms`: X (4, F) real and Y (4, F) complex with
+    terms = X + Re(Y e^{i2πfτ}) at front→rear delay τ.
+
+    With h the wheels' responses to each wheel's road (:func:`track_responses` before the tracks are
+    formed), a track's :math:`g = h_F + h_R e^{-i\varphi}` and
+    :math:`\mathrm{Re}(g_i\bar g_j) = \mathrm{Re}(h_{F,i}\bar h_{F,j} + h_{R,i}\bar h_{R,j})
+    + \mathrm{Re}\big((h_{F,i}\bar h_{R,j} + \bar h_{R,i} h_{F,j})\,e^{i\varphi}\big)`, φ = 2πfτ."""
+    _, h = _eight_channels(f, car, speed_mps)
+    h = h[:, 1::2, :]  # (F, 4 wheels, 4 road inputs)
+    x = np.zeros((4, h.shape[0]))
+    y = np.zeros((4, h.shape[0]), dtype=complex)
+
+    def add(row: int, i: int, t: tuple[int, int], j: int, u: tuple[int, int], scale: float = 1.0) -> None:
+        fi, ri, fj, rj = h[:, i, t[0]], h[:, i, t[1]], h[:, j, u[0]], h[:, j, u[1]]
+        x[row] += scale * np.real(fi * np.conj(fj) + ri * np.conj(rj))
+        y[row] += scale * (fi * np.conj(rj) + np.conj(ri) * fj)
+
+    left, right = TRACKS
+    for axle in ((0, 1), (2, 3)):
+        for w in axle:
+            for t in TRACKS:
+                add(0, w, t, w, t)  # T0: Σ_t |g_w,t|²
+            add(1, w, left, w, right, 2.0)  # T1: 2 Re(g_w,L ḡ_w,R)
+        for t in TRACKS:
+            add(2, axle[0], t, axle[1], t)  # C0: Σ_t Re(g_l,t ḡ_r,t)
+        add(3, axle[0], left, axle[1], right)  # C1: Re(g_l,L ḡ_r,R + g_l,R ḡ_r,L)
+        add(3, axle[0], right, axle[1], left)
+    return x, y
+
+
 def axle_coherence_terms(
     f: npt.ArrayLike, car: FullCar, delay_s: float, *, speed_mps: float | None = None
 ) -> np.ndarray:
@@ -377,7 +411,7 @@ def axle_coherence_terms(
     .. math:: \sum_{\text{axles}}(S_{LL} + S_{RR}) = S_v\,(T_0 + \gamma T_1),\qquad
        \sum_{\text{axles}}\mathrm{Re}\,S_{LR} = S_v\,(C_0 + \gamma C_1),
 
-    from :func:`track_responses` (every tyre at the car's own): with G the wheels' rows,
+    every tyre at the car's own: with G the wheels' rows of :func:`track_responses`,
     :math:`S_{ij} = S_v\,(\sum_t G_{it}\bar G_{jt} + \gamma(G_{iL}\bar G_{jR} + G_{iR}\bar G_{jL}))`.
     T_0, C_0 are the independent tracks' part (C_0 ≠ 0: the body and the anti-roll bars couple the
     wheels), T_1, C_1 the coherent part; eliminating S_v, a window's measured sums T̂, Ĉ give
@@ -385,16 +419,10 @@ def axle_coherence_terms(
     equation, which :class:`suvtwin.estimators.monitor.TyreMonitor` sums over windows).
 
     `f` (F,) Hz; `delay_s` the front→rear delay (s); `speed_mps`: with the tyres' lateral slip.
-    Returns (4, F) real: T_0, T_1, C_0, C_1 in ((m/s²)/(m/s))²."""
-    g = track_responses(f, car, delay_s, speed_mps=speed_mps)[:, 1::2, :]  # (F, 4 wheels, 2 tracks)
-    out = np.zeros((4, g.shape[0]))
-    for left, right in ((0, 1), (2, 3)):
-        for w in (left, right):
-            out[0] += np.sum(np.abs(g[:, w, :]) ** 2, axis=1)
-            out[1] += 2.0 * np.real(g[:, w, 0] * np.conj(g[:, w, 1]))
-        out[2] += np.real(np.sum(g[:, left, :] * np.conj(g[:, right, :]), axis=1))
-        out[3] += np.real(g[:, left, 0] * np.conj(g[:, right, 1]) + g[:, left, 1] * np.conj(g[:, right, 0]))
-    return out
+    Returns (4, F) real: T_0, T_1, C_0, C_1 in ((m/s²)/(m/s))², from :func:`axle_coherence_parts`."""
+    f = np.atleast_1d(np.asarray(f, dtype=float))
+    x, y = axle_coherence_parts(f, car, speed_mps=speed_mps)
+    return x + np.real(y * np.exp(2j * np.pi * f * float(delay_s)))
 
 
 def gain_at_delay(
@@ -428,6 +456,7 @@ def gain_at_delay(
 def blend_gain_at_delay(
     a_sq: np.ndarray, cross: np.ndarray, f: np.ndarray, delay_s: float, band_start: np.ndarray,
     targets: np.ndarray, tables: np.ndarray, weights: np.ndarray, out: np.ndarray,
+    coherent: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
 ) -> None:
     r"""Band-averaged gains at delay τ (:func:`gain_at_delay`) of stacked tables, blended and added in
     place: for each i, ``out[targets[i]] += weights[i, k] * gain(table tables[i, k])`` for the k with a
@@ -437,9 +466,24 @@ def blend_gain_at_delay(
     C-contiguous; `band_start` (K,) int64 as :func:`gain_at_delay`'s (trusted: no checks); `targets`
     (N,), `tables` and `weights` (N, L); `out` (T, …, K) float, C-contiguous. The same sums as
     :func:`gain_at_delay` followed by the blend, bit for bit, without the picked rows' index array and
-    a Python loop over the (target, table) pairs (the online monitor calls this every update)."""
+    a Python loop over the (target, table) pairs (the online monitor calls this every update).
+
+    `coherent`: (A', B', γ) with A', B' shaped as `a_sq`, `cross` (:func:`projected_cross_terms`'s
+    terms of the same tables) and γ (K,) the tracks' coherence per band: the gain of each band is
+    then its mean of :math:`A + 2\mathrm{Re}(B e^{i\varphi})` plus γ times its mean of
+    :math:`A' + 2\mathrm{Re}(B' e^{i\varphi})`, both in the same pass."""
     rows_per = int(np.prod(a_sq.shape[1:-1], dtype=np.int64))
     phase = np.exp(2j * np.pi * f * float(delay_s))
+    if coherent is not None:
+        a1, b1, gamma = coherent
+        _band_gain_blend_coherent(
+            a_sq.reshape(-1, f.size), cross.reshape(-1, f.size),
+            a1.reshape(-1, f.size), b1.reshape(-1, f.size),
+            phase.real.copy(), phase.imag.copy(), band_start, np.ascontiguousarray(gamma, dtype=float),
+            rows_per, np.asarray(targets, dtype=np.int64), np.ascontiguousarray(tables, dtype=np.int64),
+            np.ascontiguousarray(weights, dtype=float), out.reshape(out.shape[0] * rows_per, -1),
+        )  # fmt: skip
+        return
     _band_gain_blend(a_sq.reshape(-1, f.size), cross.reshape(-1, f.size), phase.real.copy(),
                      phase.imag.copy(), band_start, rows_per, np.asarray(targets, dtype=np.int64),
                      np.ascontiguousarray(tables, dtype=np.int64), np.ascontiguousarray(weights, dtype=float),
@@ -482,6 +526,40 @@ def _band_gain_blend(a_sq, cross, cos_f, sin_f, band_start, rows_per, targets, t
                 o = targets[i] * rows_per + q
                 for k in range(band_start.size):
                     out[o, k] += w * means[k]
+
+
+@cached_njit
+def _band_gain_blend_coherent(a_sq, cross, a1, b1, cos_f, sin_f, band_start, gamma, rows_per, targets, tables,
+                              weights, out):  # fmt: skip
+    """:func:`_band_gain_blend` with the tracks' cross term: band k's mean of
+    a_sq + 2 Re(cross e^{iφ}) + gamma[k] (a1 + 2 Re(b1 e^{iφ})), in one straight loop over each row's
+    frequencies (:func:`blend_gain_at_delay`)."""
+    n_k, n_f = band_start.size, a_sq.shape[1]
+    gamma_f = np.empty(n_f)  # each frequency's band's coherence
+    for k in range(n_k):
+        j1 = band_start[k + 1] if k + 1 < n_k else n_f
+        for j in range(band_start[k], j1):
+            gamma_f[j] = gamma[k]
+    row = np.empty(n_f)
+    for i in range(targets.size):
+        for m in range(tables.shape[1]):
+            w = weights[i, m]
+            if not w > 0.0:
+                continue
+            for q in range(rows_per):
+                r = tables[i, m] * rows_per + q
+                for j in range(n_f):
+                    c, s = cos_f[j], sin_f[j]
+                    b, e = cross[r, j], b1[r, j]
+                    row[j] = (a_sq[r, j] + 2.0 * (b.real * c - b.imag * s)
+                              + gamma_f[j] * (a1[r, j] + 2.0 * (e.real * c - e.imag * s)))  # fmt: skip
+                o = targets[i] * rows_per + q
+                for k in range(n_k):
+                    j1 = band_start[k + 1] if k + 1 < n_k else n_f
+                    acc = 0.0
+                    for j in range(band_start[k], j1):
+                        acc += row[j]
+                    out[o, k] += w * acc / (j1 - band_start[k])
 
 
 @cached_njit
@@ -530,6 +608,14 @@ def track_responses(
     so the eight channels' spectrum is :math:`S_v\,G G^H` (G the returned (8, 2) per frequency):
     each corner's 2×2 block is :func:`corner_spectrum`'s. `speed_mps`: with the tyres' lateral
     slip at that speed (None: without)."""
+    f, h = _eight_channels(f, car, speed_mps)
+    lag = np.exp(-2j * np.pi * f * delay_s)[:, None]
+    return np.stack([h[:, :, front] + h[:, :, rear] * lag for front, rear in TRACKS], axis=-1)
+
+
+def _eight_channels(f: npt.ArrayLike, car: FullCar, speed_mps: float | None) -> tuple[np.ndarray, np.ndarray]:
+    """f (F,) Hz and all eight accelerations per unit road velocity under each wheel, every tyre at the
+    car's own: (F, 8, 4) complex, output 2·corner + (0 body, 1 wheel), input wheel fl, fr, rl, rr."""
     f, s, jac, dyn, tyre = _with_tyres(car, f, speed_mps)
     wheels = 3 + np.arange(4)
     force = np.zeros((f.size, dyn.shape[-1], 4), dtype=complex)  # generalised force per unit road elevation
@@ -538,6 +624,4 @@ def track_responses(
     out = np.zeros((8, 7))
     out[0::2, :3] = jac  # body point above each corner
     out[1::2, 3:] = np.eye(4)  # its wheel
-    h = s[:, None, None] * np.einsum("oj,fjw->fow", out, x)  # (F, 8, 4) per road velocity
-    lag = np.exp(-2j * np.pi * f * delay_s)[:, None]
-    return np.stack([h[:, :, front] + h[:, :, rear] * lag for front, rear in TRACKS], axis=-1)
+    return f, s[:, None, None] * np.einsum("oj,fjw->fow", out, x)  # (F, 8, 4) per road velocity

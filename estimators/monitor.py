@@ -172,7 +172,7 @@ from scipy.special import ndtr
 
 from suvtwin.errors import InputError
 from suvtwin.estimators.full_car import (
-    axle_coherence_terms,
+    axle_coherence_parts,
     blend_gain_at_delay,
     projected_cross_terms,
     projected_terms,
@@ -300,8 +300,10 @@ class MonitorConfig:
         axles' wheels (:meth:`TyreMonitor._update_coherence`), a number in [−1, 1] fixes it (0:
         independent tracks, the monitor before 2026-12-04). On roads whose tracks are correlated
         taken as 0 read every tyre low: on the first 32 ``constant`` scenarios with their tracks
-        correlated by 0.5 (the simulator's ``tracks: correlated``) −21.0 ± 17.1 kPa at 10 s and a
-        would-be false warning on 31 of 128 tyres, with identical tracks −44.6 ± 24.1 and 124 of 128.
+        correlated by 0.5 (the simulator's ``tracks: correlated``) −21.0 ± 17.1 kPa at 10 s (with
+        the radii) and a would-be false warning on 31 of 128 tyres, with identical tracks
+        −44.6 ± 24.1 and 124 of 128; estimated, −4.7 ± 15.3 and none, −5.7 ± 19.9 and 1 (held 0.951)
+        (``python bench/monitor_tracks.py --runs 32``).
     coherence_memory_s : float
         Time constant of the coherence estimate's exponential memory, s (its sums decay by
         exp(−elapsed/τ) per update).
@@ -1043,6 +1045,8 @@ class TyreMonitor:
             if set(column) == {0, 1, 2, 3}:
                 self._coherence_car = car
                 self._axles = np.array([column[0], column[1], column[2], column[3]])  # fl, fr, rl, rr
+                # full_car.axle_coherence_terms' speed-free parts on the bands' frequencies
+                self._coherence_x, self._coherence_y = axle_coherence_parts(self.freq, car)
         self._coherence_fixed = 0.0 if cfg.track_coherence is None else float(cfg.track_coherence)
         self._estimate_coherence = cfg.track_coherence is None and self._coherence_car is not None
         # each band's coherence pooled from the bands within _COHERENCE_POOL_OCTAVES of it, by their bins
@@ -1411,6 +1415,7 @@ class TyreMonitor:
         used = status == _USED
         t_end = float(t[-1])
         elapsed = cfg.update_s if not np.isfinite(s.last_segment_t) else t_end - s.last_segment_t
+        wheel_fft, have_fft = None, np.zeros(n_c, dtype=bool)  # the whole windows' wheel transforms
         s.last_segment_t = t_end
         changing_before = s.fit.changing > 0.5
         analysed_rate, analysed_touch = np.full(n_c, np.nan), np.full(n_c, np.nan)
@@ -1424,7 +1429,10 @@ class TyreMonitor:
             whole = used & (tail == t.size)
             spec = np.zeros((n_c, 1, self.freq.size, 3), dtype=complex)
             if np.any(whole):
-                spec[whole, 0] = self._cross_spectra(a_s[:, whole], a_u[:, whole])
+                transforms = self._transforms(np.stack([a_s[:, whole].T, a_u[:, whole].T]))
+                spec[whole, 0] = self._cross_spectra(a_s[:, whole], a_u[:, whole], transforms)
+                wheel_fft, have_fft = np.zeros((n_c, transforms.shape[-1]), dtype=complex), whole.copy()
+                wheel_fft[whole] = transforms[1]
             for c in np.flatnonzero(used & ~whole):
                 spec[c, 0] = self._cross_spectra(a_s[-tail[c] :, c : c + 1], a_u[-tail[c] :, c : c + 1])[0]
             band_weight = self._band(np.array([speed]))[0][0]  # the window's band (F,), both checks'
@@ -1458,7 +1466,7 @@ class TyreMonitor:
         # the preview gets the block where both of a track's corners passed every check, the rough
         # and low-speed ones too: there the ratio of the two wheels' responses leaves its model
         self._feed_previews(block, status, elapsed)
-        self._update_coherence(a_u, used, speed, elapsed)
+        self._update_coherence(wheel_fft, have_fft & used, t.size, speed, elapsed)
         if np.any(used):
             ll, lam = self._window_grid(spec, used, speed, table, blend)
             smooth = used & ((self._road_signal_z(spec, band_weight) < cfg.min_signal_z)
@@ -1493,14 +1501,16 @@ class TyreMonitor:
             pick = (lambda x, c: x[:, c]) if ok else (lambda x, c: np.full(x.shape[0], np.nan))  # noqa: E731
             track.add(pick(a_u, f), pick(a_u, r), v, acc_s_front=pick(a_s, f), acc_s_rear=pick(a_s, r))
 
-    def _update_coherence(self, a_u: np.ndarray, used: np.ndarray, speed: float, elapsed: float) -> None:
-        r"""The tracks' coherence γ per band from the two axles' wheel accelerations `a_u` (n, C) of the
-        window, where all four corners' windows are whole and `used` (at `speed`, m/s); the sums
-        decay over `elapsed` s first.
+    def _update_coherence(self, wheel_fft: np.ndarray | None, ready: np.ndarray, n: int, speed: float,
+                          elapsed: float) -> None:  # fmt: skip
+        r"""The tracks' coherence γ per band from the two axles' wheels' transforms `wheel_fft` (C, F) of
+        the window's `n` samples (:meth:`_transforms`), where all four corners are `ready` (C,) (whole
+        windows, used) at `speed` (m/s); the sums decay over `elapsed` s first.
 
         Per band, the window's four wheels' summed periodograms less their noise, T̂, and the two
         axles' left–right cross periodograms (real part), Ĉ, with the linear full car's terms at the
-        window's front→rear delay (:func:`suvtwin.estimators.full_car.axle_coherence_terms`) give
+        window's front→rear delay (:func:`suvtwin.estimators.full_car.axle_coherence_terms`, from its
+        parts tabulated at start) give
         the estimating equation a = γ b, :math:`a = (\hat T C_0 - \hat C T_0)/s`,
         :math:`b = (\hat C T_1 - \hat T C_1)/s`, s = (T̂ + the noise) T_0: scale-free, and a
         window whose wheels read mostly noise counts for little (b → 0). The windows' Σab and Σb²
@@ -1519,20 +1529,15 @@ class TyreMonitor:
         decay = math.exp(-elapsed / self.config.coherence_memory_s)
         s.coh_ab *= decay
         s.coh_bb *= decay
-        x = a_u[:, self._axles].T  # (4, n): fl, fr, rl, rr
-        if np.all(used[self._axles]) and np.isfinite(speed) and np.all(np.isfinite(x)):
-            if x.shape[-1] == self.window:  # the window's line taken out after the transform (_cross_spectra)
-                slope = (x @ self._ramp) / self._ramp_norm
-                X = np.fft.rfft(x, axis=-1)[..., self._f_index] - slope[:, None] * self._ramp_dft
-            else:  # the first window, while it fills: zero-padded, counted for its share
-                X = np.fft.rfft(_detrend(x), n=self.window, axis=-1)[..., self._f_index]
-            share = x.shape[-1] / self.window
-            k = 2.0 * self.dt / x.shape[-1]
+        if wheel_fft is not None and np.all(ready[self._axles]) and np.isfinite(speed):
+            X = wheel_fft[self._axles]  # fl, fr, rl, rr
+            share = n / self.window  # the first window, while it fills, counts for its share
+            k = 2.0 * self.dt / n
             fine = np.stack([np.sum(np.abs(X) ** 2, axis=0),
                              np.real(X[0] * np.conj(X[1]) + X[2] * np.conj(X[3]))]) * k  # fmt: skip
             auto, cross = np.add.reduceat(fine, self._group_start, axis=1) / self._group_size
-            car = self._coherence_car
-            t0, t1, c0, c1 = axle_coherence_terms(self.freq, car, car.wheelbase / speed)
+            phase = np.exp(2j * np.pi * self.freq * self._coherence_car.wheelbase / speed)
+            t0, t1, c0, c1 = self._coherence_x + np.real(self._coherence_y * phase)  # axle_coherence_terms
             signal = auto - 4.0 * self.noise
             scale = auto * t0
             a = (signal * c0 - cross * t0) / scale
@@ -1581,18 +1586,13 @@ class TyreMonitor:
                 if self.models[c].full_car is not None:
                     by_wheelbase.setdefault(self.models[c].full_car.wheelbase, []).append(c)
                 by_contact.setdefault(self.models[c].envelope_half_length, []).append(c)
+            # with the tracks' cross term where they are coherent (γ per band)
+            coherence = self._state.coherence
+            coherent = (self._car_a1, self._car_b1, coherence) if np.any(coherence != 0.0) else None
             for wheelbase, same in by_wheelbase.items():
                 blend_gain_at_delay(self._car_a, self._car_b, self._fine, wheelbase / speed,
                                     self._group_start, np.array(same), table[same], blend[same],
-                                    gain)  # fmt: skip
-            coherence = self._state.coherence
-            if by_wheelbase and np.any(coherence != 0.0):  # the tracks' cross term, γ per band
-                coherent = np.zeros(gain.shape)
-                for wheelbase, same in by_wheelbase.items():
-                    blend_gain_at_delay(self._car_a1, self._car_b1, self._fine, wheelbase / speed,
-                                        self._group_start, np.array(same), table[same], blend[same],
-                                        coherent)  # fmt: skip
-                gain += coherence * coherent
+                                    gain, coherent)  # fmt: skip
             # the tyre's enveloping filters the road it reads: once per contact length
             for half, same in by_contact.items():
                 if half > 0.0:
@@ -1764,23 +1764,29 @@ class TyreMonitor:
             (wheel < cfg.min_signal_z) & (body >= cfg.silent_other_z)
         )
 
-    def _cross_spectra(self, a_s: np.ndarray, a_u: np.ndarray) -> np.ndarray:
-        r"""One-sided cross-periodogram per Hz of (sprung, unsprung) on the window's frequencies, (C, F, 3):
-        S11, S22, S12. Linear detrend, rectangular window; fewer samples than a window are
-        zero-padded to it (the periodogram of the data there, sampled on the window's grid).
+    def _transforms(self, x: np.ndarray) -> np.ndarray:
+        """The linearly detrended discrete Fourier transform of samples `x` (..., n) at the window's kept
+        frequencies (..., F): fewer samples than a window zero-padded to it (:meth:`_cross_spectra`)."""
+        if x.shape[-1] == self.window:
+            slope = (x @ self._ramp) / self._ramp_norm
+            return np.fft.rfft(x, axis=-1)[..., self._f_index] - slope[..., None] * self._ramp_dft
+        return np.fft.rfft(_detrend(x), n=self.window, axis=-1)[..., self._f_index]
+
+    def _cross_spectra(
+        self, a_s: np.ndarray, a_u: np.ndarray, transforms: np.ndarray | None = None
+    ) -> np.ndarray:
+        r"""One-sided cross-periodogram per Hz of (sprung, unsprung) (n, C) each on the window's
+        frequencies, (C, F, 3): S11, S22, S12. Linear detrend, rectangular window; fewer samples than a
+        window are zero-padded to it (the periodogram of the data there, sampled on the window's grid).
+        `transforms` (2, C, F): the two channels' :meth:`_transforms`, if already taken.
 
         A whole window's line is taken out after the transform: at Fourier frequency k ≠ 0 the
         window's mean adds nothing and the ramp n − n̄ (n = 0 … N−1) adds
         :math:`\sum_n n z^n = N/(z - 1)`, :math:`z = e^{-i2\pi k/N}`, so the detrended transform is
         X_k − b N/(z_k − 1), b the least-squares slope (the same within 1e-13 of the largest bin, at
         a fifth of the cost of detrending the samples)."""
-        x = np.stack([a_s.T, a_u.T])  # (2, C, n)
-        if x.shape[-1] == self.window:
-            slope = (x @ self._ramp) / self._ramp_norm
-            X = np.fft.rfft(x, axis=-1)[..., self._f_index] - slope[..., None] * self._ramp_dft
-        else:
-            X = np.fft.rfft(_detrend(x), n=self.window, axis=-1)[..., self._f_index]
-        k = 2.0 * self.dt / x.shape[-1]
+        X = self._transforms(np.stack([a_s.T, a_u.T])) if transforms is None else transforms  # (2, C, F)
+        k = 2.0 * self.dt / a_s.shape[0]
         fine = np.empty(X.shape[1:] + (3,), dtype=complex)
         fine[..., 0] = np.abs(X[0]) ** 2 * k
         fine[..., 1] = np.abs(X[1]) ** 2 * k

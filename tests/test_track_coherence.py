@@ -10,6 +10,7 @@ from suvtwin.errors import InputError
 from suvtwin.estimators.full_car import (
     TRACKS,
     axle_coherence_terms,
+    blend_gain_at_delay,
     corner_spectrum,
     gain_at_delay,
     projected_cross_terms,
@@ -130,3 +131,26 @@ def test_track_coherence_config_is_checked():
         MonitorConfig(track_coherence=1.2)
     with pytest.raises(InputError, match="coherence_memory_s"):
         MonitorConfig(coherence_memory_s=0.5)
+
+
+def test_the_blend_with_the_tracks_cross_term_is_the_blend_of_the_coherent_gains():
+    # the monitor's one-pass blend with γ per band against gain_at_delay of the tables A + γA', B + γB'
+    # (γ spread over each band's frequencies), blended by hand
+    rng = np.random.default_rng(7)
+    f = np.linspace(0.5, 20.0, 40)
+    a0, a1 = rng.random((2, 4, 3, 5, f.size))
+    b0, b1 = rng.standard_normal((2, 4, 3, 5, f.size)) + 1j * rng.standard_normal((2, 4, 3, 5, f.size))
+    start = np.array([0, 1, 2, 6, 10, 25, 39])
+    gamma = rng.random(start.size)
+    per_f = np.repeat(gamma, np.diff(np.r_[start, f.size]))
+    banded = gain_at_delay(a0 + per_f * a1, b0 + per_f * b1, f, 0.21, band_start=start)  # (4, 3, 5, K)
+    targets, tables = np.array([1, 0]), np.array([[3, 1], [2, 0]])
+    weights = np.array([[0.4, 0.6], [1.0, 0.0]])
+    out = rng.random((2, 3, 5, start.size))
+    expected = out.copy()
+    for i, t in enumerate(targets):
+        for k in range(2):
+            if weights[i, k] > 0:
+                expected[t] += weights[i, k] * banded[tables[i, k]]
+    blend_gain_at_delay(a0, b0, f, 0.21, start, targets, tables, weights, out, (a1, b1, gamma))
+    np.testing.assert_allclose(out, expected, rtol=1e-12)
