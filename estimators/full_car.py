@@ -449,7 +449,7 @@ def gain_at_delay(
     pick = np.arange(a2.shape[0]) if rows is None else np.asarray(rows, dtype=np.int64)
     phase = np.exp(2j * np.pi * f * float(delay_s))
     out = np.empty((pick.size, start.size))
-    _band_gain(a2, b2, phase.real.copy(), phase.imag.copy(), start.astype(np.int64), pick, out)
+    _band_gain(a2, b2, *_NO_CROSS, phase.real.copy(), phase.imag.copy(), start.astype(np.int64), pick, out)
     return out.reshape(lead + (start.size,)) if rows is None else out
 
 
@@ -474,32 +474,38 @@ def blend_gain_at_delay(
     :math:`A' + 2\mathrm{Re}(B' e^{i\varphi})`, both in the same pass."""
     rows_per = int(np.prod(a_sq.shape[1:-1], dtype=np.int64))
     phase = np.exp(2j * np.pi * f * float(delay_s))
-    if coherent is not None:
-        a1, b1, gamma = coherent
-        _band_gain_blend_coherent(
-            a_sq.reshape(-1, f.size), cross.reshape(-1, f.size),
-            a1.reshape(-1, f.size), b1.reshape(-1, f.size),
-            phase.real.copy(), phase.imag.copy(), band_start, np.ascontiguousarray(gamma, dtype=float),
-            rows_per, np.asarray(targets, dtype=np.int64), np.ascontiguousarray(tables, dtype=np.int64),
-            np.ascontiguousarray(weights, dtype=float), out.reshape(out.shape[0] * rows_per, -1),
-        )  # fmt: skip
-        return
-    _band_gain_blend(a_sq.reshape(-1, f.size), cross.reshape(-1, f.size), phase.real.copy(),
+    a1, b1, gamma_f = _NO_CROSS
+    if coherent is not None:  # γ per band spread over its frequencies
+        a1, b1 = coherent[0].reshape(-1, f.size), coherent[1].reshape(-1, f.size)
+        gamma_f = np.repeat(np.asarray(coherent[2], dtype=float), np.diff(np.r_[band_start, f.size]))
+    _band_gain_blend(a_sq.reshape(-1, f.size), cross.reshape(-1, f.size), a1, b1, gamma_f, phase.real.copy(),
                      phase.imag.copy(), band_start, rows_per, np.asarray(targets, dtype=np.int64),
                      np.ascontiguousarray(tables, dtype=np.int64), np.ascontiguousarray(weights, dtype=float),
                      out.reshape(out.shape[0] * rows_per, -1))  # fmt: skip
 
 
+_NO_CROSS = (np.empty((0, 0)), np.empty((0, 0), dtype=complex), np.empty(0))
+"""No tracks' cross term for the compiled band gains (:func:`_row_band_means`)."""
+
+
 @cached_njit
-def _row_band_means(a_sq, cross, cos_f, sin_f, band_start, r, row, means):
+def _row_band_means(a_sq, cross, a1, b1, gamma_f, cos_f, sin_f, band_start, r, row, means):
     """means[k] = mean over band k's frequencies j of a_sq[r, j] + 2 Re(cross[r, j] e^{iφ_j}),
-    e^{iφ} = cos_f + i sin_f; `row` (F,) is scratch. The row's gain is taken over all frequencies in
-    one straight loop (which the compiler vectorizes), then averaged per band: 1.3 times faster than
-    summing band by band, the same sums."""
+    e^{iφ} = cos_f + i sin_f, plus gamma_f[j] (a1[r, j] + 2 Re(b1[r, j] e^{iφ_j})) where `gamma_f` (F,)
+    is not empty (the tracks' cross term, γ per frequency); `row` (F,) is scratch. The row's gain is
+    taken over all frequencies in one straight loop (which the compiler vectorizes), then averaged
+    per band: 1.3 times faster than summing band by band, the same sums."""
     n_k, n_f = band_start.size, a_sq.shape[1]
-    for j in range(n_f):
-        b = cross[r, j]
-        row[j] = a_sq[r, j] + 2.0 * (b.real * cos_f[j] - b.imag * sin_f[j])
+    if gamma_f.size == 0:
+        for j in range(n_f):
+            b = cross[r, j]
+            row[j] = a_sq[r, j] + 2.0 * (b.real * cos_f[j] - b.imag * sin_f[j])
+    else:
+        for j in range(n_f):
+            c, s = cos_f[j], sin_f[j]
+            b, e = cross[r, j], b1[r, j]
+            row[j] = (a_sq[r, j] + 2.0 * (b.real * c - b.imag * s)
+                      + gamma_f[j] * (a1[r, j] + 2.0 * (e.real * c - e.imag * s)))  # fmt: skip
     for k in range(n_k):
         j1 = band_start[k + 1] if k + 1 < n_k else n_f
         acc = 0.0
@@ -509,10 +515,11 @@ def _row_band_means(a_sq, cross, cos_f, sin_f, band_start, r, row, means):
 
 
 @cached_njit
-def _band_gain_blend(a_sq, cross, cos_f, sin_f, band_start, rows_per, targets, tables, weights, out):
+def _band_gain_blend(a_sq, cross, a1, b1, gamma_f, cos_f, sin_f, band_start, rows_per, targets, tables,
+                     weights, out):  # fmt: skip
     """out[targets[i] · rows_per + r, k] += weights[i, l] · (band k's mean of row
-    tables[i, l] · rows_per + r of :func:`_band_gain`'s gain), for each l with a positive weight, in
-    order (:func:`blend_gain_at_delay`)."""
+    tables[i, l] · rows_per + r of :func:`_row_band_means`'s gain, with the tracks' cross term where
+    `gamma_f` is not empty), for each l with a positive weight, in order (:func:`blend_gain_at_delay`)."""
     row = np.empty(a_sq.shape[1])
     means = np.empty(band_start.size)
     for i in range(targets.size):
@@ -522,53 +529,19 @@ def _band_gain_blend(a_sq, cross, cos_f, sin_f, band_start, rows_per, targets, t
                 continue
             for q in range(rows_per):
                 r = tables[i, m] * rows_per + q
-                _row_band_means(a_sq, cross, cos_f, sin_f, band_start, r, row, means)
+                _row_band_means(a_sq, cross, a1, b1, gamma_f, cos_f, sin_f, band_start, r, row, means)
                 o = targets[i] * rows_per + q
                 for k in range(band_start.size):
                     out[o, k] += w * means[k]
 
 
 @cached_njit
-def _band_gain_blend_coherent(a_sq, cross, a1, b1, cos_f, sin_f, band_start, gamma, rows_per, targets, tables,
-                              weights, out):  # fmt: skip
-    """:func:`_band_gain_blend` with the tracks' cross term: band k's mean of
-    a_sq + 2 Re(cross e^{iφ}) + gamma[k] (a1 + 2 Re(b1 e^{iφ})), in one straight loop over each row's
-    frequencies (:func:`blend_gain_at_delay`)."""
-    n_k, n_f = band_start.size, a_sq.shape[1]
-    gamma_f = np.empty(n_f)  # each frequency's band's coherence
-    for k in range(n_k):
-        j1 = band_start[k + 1] if k + 1 < n_k else n_f
-        for j in range(band_start[k], j1):
-            gamma_f[j] = gamma[k]
-    row = np.empty(n_f)
-    for i in range(targets.size):
-        for m in range(tables.shape[1]):
-            w = weights[i, m]
-            if not w > 0.0:
-                continue
-            for q in range(rows_per):
-                r = tables[i, m] * rows_per + q
-                for j in range(n_f):
-                    c, s = cos_f[j], sin_f[j]
-                    b, e = cross[r, j], b1[r, j]
-                    row[j] = (a_sq[r, j] + 2.0 * (b.real * c - b.imag * s)
-                              + gamma_f[j] * (a1[r, j] + 2.0 * (e.real * c - e.imag * s)))  # fmt: skip
-                o = targets[i] * rows_per + q
-                for k in range(n_k):
-                    j1 = band_start[k + 1] if k + 1 < n_k else n_f
-                    acc = 0.0
-                    for j in range(band_start[k], j1):
-                        acc += row[j]
-                    out[o, k] += w * acc / (j1 - band_start[k])
-
-
-@cached_njit
-def _band_gain(a_sq, cross, cos_f, sin_f, band_start, rows, out):
+def _band_gain(a_sq, cross, a1, b1, gamma_f, cos_f, sin_f, band_start, rows, out):
     """out[i, k] = mean over band k's frequencies j of a_sq[rows[i], j] + 2 Re(cross[rows[i], j] e^{iφ_j}),
-    e^{iφ} = cos_f + i sin_f (:func:`gain_at_delay`; :func:`_row_band_means`)."""
+    e^{iφ} = cos_f + i sin_f (:func:`gain_at_delay`; :func:`_row_band_means`, here with `_NO_CROSS`)."""
     row = np.empty(a_sq.shape[1])
     for i in range(rows.size):
-        _row_band_means(a_sq, cross, cos_f, sin_f, band_start, rows[i], row, out[i])
+        _row_band_means(a_sq, cross, a1, b1, gamma_f, cos_f, sin_f, band_start, rows[i], row, out[i])
 
 
 def corner_spectrum(
