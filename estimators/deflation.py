@@ -164,7 +164,14 @@ class DeflationRule:
         and of two others, in the common fit. On the MuJoCo ``constant`` runs: front–rear 0.76,
         0.56 and 0.32 at 10, 30 and 40 s, the two fronts −0.2 to 0.15; the largest are taken
         (0.75, 0.15): the common loss's σ is then not smaller than the data's. Without the tracks
-        given, every pair gets `track_correlation`.
+        given, every pair gets `track_correlation`. Where the monitor reads the left and right
+        tracks' road coherence γ (``track_coherence`` of :func:`deflation_warnings`), two tyres on
+        different tracks get at least `track_correlation`·γ²: their errors come from the
+        periodograms' fluctuations, and two jointly Gaussian Fourier coefficients of correlation γ
+        have periodograms correlated by γ² (cov(|X|², |Y|²) = |E[X Ȳ]|²). On the first 32
+        ``constant`` scenarios with identical tracks (γ read 0.90–0.95) the two sides' errors
+        correlated 0.62–0.91 at 10–30 s (fronts, rears; the preview's output), against −0.2 to
+        0.5 with independent tracks (``bench/monitor_tracks.py``'s runs).
     radius_spread_permille : float
         The spread (σ) of the tyres' effective rolling radii about the tyre model's at the same
         pressure and load, ‰ (manufacturing, wear): the fusion with the radii compares the tyres
@@ -320,6 +327,7 @@ def deflation_warnings(
     upper_level: float = 0.95,
     tracks: tuple[tuple[int, int], ...] | list = (),
     radius: RadiusEvidence | None = None,
+    track_coherence: np.ndarray | None = None,
 ) -> DeflationWarnings:
     r"""Warnings from the monitor's rows: `t_s` (K,), `pressure_kpa`, `sigma_kpa`, `observable` (K, C).
 
@@ -333,7 +341,9 @@ def deflation_warnings(
     on one track, for the common fit's error correlation (:class:`DeflationRule`). `radius`: the
     radius analysis at each row (:class:`RadiusEvidence`), fused with the estimates where every tyre
     has a reference (``fused_kpa``, ``fused_sigma_kpa``; NaN elsewhere) and the tyre's probability
-    then taken from the fused estimate.
+    then taken from the fused estimate. `track_coherence` (K,): the left and right tracks' road
+    coherence the monitor read at each row (its ``track_coherence``; NaN: none), which raises the
+    correlation of tyres on different tracks (:class:`DeflationRule`'s ``cross_correlation``).
     """
     rule = rule or DeflationRule()
     t = np.asarray(t_s, dtype=float)
@@ -355,8 +365,16 @@ def deflation_warnings(
             if not (0 <= f < n_c and 0 <= r < n_c and f != r):
                 raise InputError(f"tracks must be pairs of distinct columns 0–{n_c - 1}, got {tracks!r}")
             same_track[f, r] = same_track[r, f] = True
-    rho = np.where(same_track, rule.track_correlation, rule.cross_correlation)
-    np.fill_diagonal(rho, 1.0)
+    # the errors' correlation per row: tyres on different tracks share the tracks' coherent part
+    cross = np.full(n_k, rule.cross_correlation)
+    if track_coherence is not None:
+        gamma = np.asarray(track_coherence, dtype=float)
+        if gamma.shape != (n_k,):
+            raise InputError(f"track_coherence must have shape ({n_k},), got {gamma.shape}")
+        coherent = rule.track_correlation * np.clip(np.nan_to_num(gamma), 0.0, 1.0) ** 2
+        cross = np.maximum(cross, coherent)
+    rho = np.where(same_track[None], rule.track_correlation, cross[:, None, None])  # (K, C, C)
+    rho[:, np.arange(n_c), np.arange(n_c)] = 1.0
     common = np.full(n_k, np.nan)
     ref = np.full((n_k, n_c), np.nan)
     prob = np.full((n_k, n_c), np.nan)
@@ -423,7 +441,7 @@ def deflation_warnings(
                            excess_cov(wheel_sd(radius.sigma[k], int(read.sum())), read), read)  # fmt: skip
         if calibration is not None and learned_all and np.array_equal(read, calibration[2]):
             sd_k = sig[k] if radius.lag_kpa is None else np.hypot(sig[k], radius.lag_kpa[k])
-            fused[k], cov = _fuse_radius(p[k], sd_k, rho, ref_now, radius, k, calibration, ref_sig)
+            fused[k], cov = _fuse_radius(p[k], sd_k, rho[k], ref_now, radius, k, calibration, ref_sig)
             fused_sd[k], fused_cov[k] = np.sqrt(np.diag(cov)), cov
             for c in range(n_c):  # cov is the loss's, p − reference: the reference's σ is in it
                 prob[k, c] = _below(keep * ref_now[c], fused[k, c], fused_sd[k, c])
@@ -433,7 +451,7 @@ def deflation_warnings(
         inside = obs[k] & np.isfinite(rel)
         if rule.common_alpha is not None:
             scale = np.outer(ref_now, ref_now)
-            fit = _common_fit(inside, rel, rel_sd, rho, fused[k] / ref_now, fused_cov[k] / scale,
+            fit = _common_fit(inside, rel, rel_sd, rho[k], fused[k] / ref_now, fused_cov[k] / scale,
                               rule.common_alpha)  # fmt: skip
             if fit is not None:
                 inside, u, cov_u = fit

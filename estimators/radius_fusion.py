@@ -182,7 +182,8 @@ def fuse_with_radii(
     iterations: int = 4,
     lag_kpa: npt.ArrayLike | None = None,
 ) -> FusedPressure:
-    r"""The vibration estimates `p_kpa` ± `sigma_kpa` (K, C), kPa, errors correlated by `rho` (C, C), fused
+    r"""The vibration estimates `p_kpa` ± `sigma_kpa` (K, C), kPa, errors correlated by `rho` (C, C; or
+    (K, C, C), one per row), fused
     with the radius analysis's `excess` ± `excess_sigma` (K, C; dimensionless, 1e-3 = 1 ‰) through the
     tyre `model` with the tyres' radius spread `spread_permille` (σ, ‰) — see the module docstring.
     `iterations`: Gauss–Newton steps from the vibration estimate. `lag_kpa` (K, C): how far the
@@ -204,8 +205,10 @@ def fuse_with_radii(
         sd = np.sqrt(sd**2 + np.nan_to_num(lag) ** 2)
     if sd.shape != p.shape or e.shape != p.shape or se.shape != p.shape:
         raise InputError(f"fuse_with_radii: p, sigma, excess and excess_sigma must all be {p.shape}")
-    if rho.shape != (n_c, n_c) or model.n_tyres != n_c:
-        raise InputError(f"fuse_with_radii: rho must be ({n_c}, {n_c}) and the model for {n_c} tyres")
+    if rho.shape not in ((n_c, n_c), (n_k, n_c, n_c)) or model.n_tyres != n_c:
+        raise InputError(f"fuse_with_radii: rho must be ({n_c}, {n_c}) or ({n_k}, {n_c}, {n_c}) and the "
+                         f"model for {n_c} tyres")  # fmt: skip
+    rho = np.broadcast_to(rho, (n_k, n_c, n_c))
     if not (np.isfinite(spread_permille) and spread_permille >= 0.0):
         raise InputError(f"radius spread must be ≥ 0 ‰, got {spread_permille!r}")
     if not (isinstance(iterations, int) and iterations >= 1):
@@ -220,7 +223,7 @@ def fuse_with_radii(
         rows = ok & np.all(read == alive, axis=1)
         first = np.flatnonzero(alive)[:-1]  # any m − 1 of the m excesses hold all their information
         p_o, sd_o, e_o, se_o = p[rows], sd[rows], e[rows][:, first], se[rows]
-        prior_info = np.linalg.inv(rho * (sd_o[:, :, None] * sd_o[:, None, :]))
+        prior_info = np.linalg.inv(rho[rows] * (sd_o[:, :, None] * sd_o[:, None, :]))
         a = excess_operator(n_c, alive)[first]
         own = np.sqrt(wheel_sd(se_o, int(alive.sum())) ** 2 + (1e-3 * spread_permille) ** 2)
         r = excess_cov(own, alive)[:, first][:, :, first]

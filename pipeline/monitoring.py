@@ -433,7 +433,7 @@ def monitor_run(
         upper_kpa=update.pressure_upper_pa / 1e3, upper_level=TAIL_LEVELS[1],
         tracks=[(corners.index(f), corners.index(r)) for f, r in (("fl", "rl"), ("fr", "rr"))
                 if f in corners and r in corners],
-        radius=evidence,
+        radius=evidence, track_coherence=update.track_coherence,
     )  # fmt: skip
     columns: dict[str, np.ndarray] = {"t_s": update.t_s, "speed_mps": update.speed_mps}
     for i, c in enumerate(corners):

@@ -268,3 +268,22 @@ def test_a_wheel_without_an_excess_fuses_the_others_as_a_three_tyre_car():
     lone = fuse_with_radii(p_hat, sd, rho, [[0.1e-3, np.nan, np.nan, np.nan]] * 2, [[0.2e-3, np.nan, np.nan,
                            np.nan]] * 2, model)  # fmt: skip
     assert np.isnan(lone.pressure_kpa).all()
+
+
+def test_a_correlation_per_row_is_each_rows_own_fusion():
+    # rho (K, C, C): each row fused as if alone with its own rho
+    model = _mf_model()
+    rng = np.random.default_rng(9)
+    p_hat = 200.0 + rng.normal(0.0, 15.0, (3, 4))
+    sd = np.full((3, 4), 12.0)
+    excess = rng.normal(0.0, 0.5e-3, (3, 4))
+    se = np.full((3, 4), 0.2e-3)
+    rhos = np.stack([_rho(cross=c) for c in (0.15, 0.4, 0.7)])
+    fused = fuse_with_radii(p_hat, sd, rhos, excess, se, model)
+    for k in range(3):
+        row = slice(k, k + 1)
+        alone = fuse_with_radii(p_hat[row], sd[row], rhos[k], excess[row], se[row], model)
+        np.testing.assert_allclose(fused.pressure_kpa[k], alone.pressure_kpa[0], rtol=1e-12)
+        np.testing.assert_allclose(fused.cov_kpa2[k], alone.cov_kpa2[0], rtol=1e-12)
+    with pytest.raises(InputError, match="rho must be"):
+        fuse_with_radii(p_hat, sd, rhos[:2], excess, se, model)

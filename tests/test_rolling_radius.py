@@ -600,3 +600,37 @@ def test_a_fused_estimate_too_wide_to_be_observable_does_not_confirm_a_warning()
     loose = deflation_warnings(t, p, sig, obs, placard_kpa=230.0, tracks=tracks, radius=ev,
                                rule=DeflationRule(informed_sigma_kpa=1e3))  # fmt: skip
     assert np.all(loose.warning_time_s == 8.0)
+
+
+def test_coherent_tracks_raise_the_cross_track_correlation_of_the_fusion():
+    from dataclasses import replace
+
+    from suvtwin.estimators.deflation import DeflationRule, deflation_warnings
+
+    # the monitor's rows with the tracks' coherence γ: tyres on different tracks then correlate by
+    # track_correlation·γ² (above cross_correlation), the same as a rule with that cross correlation
+    rng = np.random.default_rng(4)
+    n_k, tracks = 5, ((0, 2), (1, 3))
+    t = np.arange(1, n_k + 1) * 4.0
+    p = 200.0 + rng.normal(0.0, 10.0, (n_k, 4))
+    sig = np.full((n_k, 4), 12.0)
+    obs = np.ones((n_k, 4), bool)
+    d = np.array([-20.0e-4, 0.0, 0.0, 0.0])
+    ev = _evidence(n_k, d - (d.sum() - d) / 3, np.full(4, 0.2e-3), 0.1e-3, placard=230.0)
+    rule = DeflationRule()
+    gamma = 0.9
+    coherent = deflation_warnings(t, p, sig, obs, placard_kpa=230.0, tracks=tracks, radius=ev, rule=rule,
+                                  track_coherence=np.full(n_k, gamma))  # fmt: skip
+    alike = replace(rule, cross_correlation=rule.track_correlation * gamma**2)
+    told = deflation_warnings(t, p, sig, obs, placard_kpa=230.0, tracks=tracks, radius=ev, rule=alike)
+    np.testing.assert_allclose(coherent.fused_sigma_kpa, told.fused_sigma_kpa, rtol=1e-12)
+    np.testing.assert_allclose(coherent.fused_kpa, told.fused_kpa, rtol=1e-12)
+    # the shared level is less known when the tracks are alike: the fused σ grows
+    plain = deflation_warnings(t, p, sig, obs, placard_kpa=230.0, tracks=tracks, radius=ev, rule=rule)
+    assert np.all(coherent.fused_sigma_kpa > plain.fused_sigma_kpa)
+    # a coherence too small to raise it, or none read (NaN), changes nothing
+    weak = deflation_warnings(t, p, sig, obs, placard_kpa=230.0, tracks=tracks, radius=ev, rule=rule,
+                              track_coherence=np.r_[np.full(n_k - 1, 0.2), np.nan])  # fmt: skip
+    np.testing.assert_array_equal(weak.fused_sigma_kpa, plain.fused_sigma_kpa)
+    with pytest.raises(InputError, match="track_coherence must have shape"):
+        deflation_warnings(t, p, sig, obs, placard_kpa=230.0, track_coherence=np.zeros(2))
