@@ -1,4 +1,4 @@
-"""The monitor on roads whose left and right tracks are correlated or identical.
+"""The monitor on roads whose left and right tracks are correlated or identical, and on other roads.
 
 Run: ``python bench/monitor_tracks.py [--runs 32] [--tracks independent,correlated:0.5,identical]
 [--coherence estimated,0] [--jobs 2]`` — prints JSON.
@@ -6,7 +6,10 @@ Run: ``python bench/monitor_tracks.py [--runs 32] [--tracks independent,correlat
 The first `--runs` scenarios of the ``constant`` set (:mod:`suvtwin.pipeline.monitor_scenarios`:
 130–230 kPa, 40–120 km/h, classes A–D with levels anywhere in the band, 0–300 kg) with the road's two
 tracks as each value of `--tracks` gives (the simulator's ``tracks``: ``independent``, ``identical``,
-or ``correlated:ρ``, the tracks correlated by ρ at every wavelength), simulated into
+or ``correlated:ρ``, the tracks correlated by ρ at every wavelength; or, tracks independent, the
+road drawn by the first-order shape filter, ``shape-filter``, a Gaussian process, instead of by
+sinusoid superposition, or with ``obstacles``: a 5 cm, 0.6 m pothole under the left track at 150 m
+and an 8 cm, 3 m sine bump under both at 300 m), simulated into
 ``bench/_runs/tracks_<value>/`` (reused on a second call; ``independent`` is the ``constant`` set's
 own cache) and monitored (:func:`suvtwin.pipeline.monitoring.monitor_run`) with each value of
 `--coherence`: ``estimated`` (the default monitor: the tracks' coherence read online from the two
@@ -38,14 +41,25 @@ from suvtwin.pipeline.scenario import parse_scenario
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from monitor_waviness import _summary, would_be_false_warnings  # noqa: E402
 
+OBSTACLES = [
+    {"kind": "pothole", "position_m": 150.0, "length_m": 0.6, "height_m": 0.05, "track": "left"},
+    {"kind": "sine_bump", "position_m": 300.0, "length_m": 3.0, "height_m": 0.08, "track": "both"},
+]
+"""The ``obstacles`` value's road obstacles."""
+
 
 def road_of(value: str) -> dict:
-    """The road's ``tracks`` fields for a `--tracks` value."""
+    """The road's fields for a `--tracks` value."""
     if value in ("independent", "identical"):
         return {"tracks": value}
+    if value == "shape-filter":
+        return {"method": "shape-filter"}
+    if value == "obstacles":
+        return {"obstacles": OBSTACLES}
     kind, _, rho = value.partition(":")
     if kind != "correlated" or not rho:
-        raise SystemExit(f"--tracks values are independent, identical or correlated:ρ, got {value!r}")
+        raise SystemExit("--tracks values are independent, identical, correlated:ρ, shape-filter or "
+                         f"obstacles, got {value!r}")  # fmt: skip
     return {"tracks": "correlated", "track_correlation": float(rho)}
 
 
