@@ -225,7 +225,6 @@ _COHERENCE_POOL_OCTAVES = 0.5  # each band's track coherence pooled from the ban
 _COHERENCE_PRIOR = 0.1  # the coherence's prior: this share of a window at full signal that read γ = 0
 
 
-
 def _at_level_floor(ll: np.ndarray, lam: np.ndarray) -> np.ndarray:
     """Per corner (C,), whether a window's likeliest grid point (the maximum of `ll` (C, D, B, G)
     over damping, slope and pressure) has its road level `lam` (log Gd(n0), same shape) at the lower
@@ -538,7 +537,7 @@ class MonitorUpdate:
     was taken to touch the road (1 without a suspension law; NaN where not analysed);
     `track_coherence` (K,): the left and right tracks' road coherence in use, averaged over the
     segment's band (the fixed ``track_coherence`` where it is not estimated; NaN before the
-    estimate has a window, or without a speed).
+    estimate has a window, without a speed, or with no corner in a full car).
     """
 
     t_s: np.ndarray
@@ -1889,9 +1888,12 @@ class TyreMonitor:
 
     def _coherence_in_band(self, speed: float) -> float:
         """The tracks' coherence in use averaged over the band at `speed` (by the bins each band
-        holds); NaN without a speed or before the estimate has a window."""
+        holds); NaN without a speed, before the estimate has a window, or with no corner in a full car
+        (where it is not used)."""
         s = self._state
-        if not np.isfinite(speed) or (self._estimate_coherence and not np.any(s.coh_bb > 0.0)):
+        if self._car_a is None or not np.isfinite(speed) or (
+            self._estimate_coherence and not np.any(s.coh_bb > 0.0)
+        ):  # fmt: skip
             return math.nan
         weight = self._band(np.array([speed]))[0][0]
         return float(weight @ s.coherence / weight.sum()) if weight.sum() > 0 else math.nan
