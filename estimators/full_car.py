@@ -37,10 +37,12 @@ h the corner's response to unit road velocity under one wheel. Projected on a fi
 + 2\,\mathrm{Re}\big((a_L\bar b_R + a_R\bar b_L)\,e^{i2\pi f\tau}\big)`: the speed enters only
 through that phase, so :func:`projected_terms` and :func:`projected_cross_terms` return the
 speed-free parts and :func:`gain_at_delay` adds the speed. Real roads' tracks are coherent at long
-wavelengths and less so at short ones (e.g. B. Bogsjö, *Vehicle System Dynamics* 46(S1), 2008,
-on measured profiles); the online monitor estimates γ per band from the two axles' wheels
-(:func:`axle_coherence_terms`): taken as 0 on roads whose tracks share their long waves, the
-tyres' stiffness came out 20 (γ = 0.5) to 45 kPa (γ = 1) low on the MuJoCo SUV.
+wavelengths and less so at short ones (C. J. Dodds, J. D. Robson, "The description of road surface
+roughness", *J. Sound Vib.* 31(2), 1973; X. Liu et al., *Mech. Syst. Signal Process.*, 2015,
+doi:10.1016/j.ymssp.2015.01.034, build left and right profiles to a given coherence function); the
+online monitor estimates γ per band from the two axles' wheels
+(:func:`axle_coherence_terms`): taken as 0, on the MuJoCo SUV the tyres' pressures came out 21 kPa
+(tracks correlated by 0.5) to 45 kPa (identical tracks) low (docs/monitor.md).
 
 **The tyres' lateral slip** (optional: a car with ``cornering_stiffness`` and a speed given). The
 wheels hang from the body on vertical slides, so when the body rolls about its centre of gravity
