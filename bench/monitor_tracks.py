@@ -6,7 +6,9 @@ Run: ``python bench/monitor_tracks.py [--runs 32] [--tracks independent,correlat
 The first `--runs` scenarios of the ``constant`` set (:mod:`suvtwin.pipeline.monitor_scenarios`:
 130–230 kPa, 40–120 km/h, classes A–D with levels anywhere in the band, 0–300 kg) with the road's two
 tracks as each value of `--tracks` gives (the simulator's ``tracks``: ``independent``, ``identical``,
-or ``correlated:ρ``, the tracks correlated by ρ at every wavelength; or, tracks independent, the
+``correlated:ρ``, the tracks correlated by ρ at every wavelength, or ``isotropic``, the two lines
+1.62 m apart on a surface rough alike in every direction, coherent at long wavelengths,
+:func:`suvtwin.roads.profile.isotropic_coherence`; or, tracks independent, the
 road drawn by the first-order shape filter, ``shape-filter``, a Gaussian process, instead of by
 sinusoid superposition, or with ``obstacles``: a 5 cm, 0.6 m pothole under the left track at 150 m
 and an 8 cm, 3 m sine bump under both at 300 m), simulated into
@@ -50,7 +52,7 @@ OBSTACLES = [
 
 def road_of(value: str) -> dict:
     """The road's fields for a `--tracks` value."""
-    if value in ("independent", "identical"):
+    if value in ("independent", "identical", "isotropic"):
         return {"tracks": value}
     if value == "shape-filter":
         return {"method": "shape-filter"}
@@ -58,8 +60,8 @@ def road_of(value: str) -> dict:
         return {"obstacles": OBSTACLES}
     kind, _, rho = value.partition(":")
     if kind != "correlated" or not rho:
-        raise SystemExit("--tracks values are independent, identical, correlated:ρ, shape-filter or "
-                         f"obstacles, got {value!r}")  # fmt: skip
+        raise SystemExit("--tracks values are independent, identical, isotropic, correlated:ρ, shape-filter "
+                         f"or obstacles, got {value!r}")  # fmt: skip
     return {"tracks": "correlated", "track_correlation": float(rho)}
 
 

@@ -58,6 +58,7 @@ class Tracks(StrEnum):
     independent = "independent"
     identical = "identical"
     correlated = "correlated"
+    isotropic = "isotropic"
 
 
 def _warn(message: str) -> None:
@@ -154,11 +155,17 @@ def road_command(
         Method, typer.Option(help="Generator: paper 000's shape filter or sinusoid superposition.")
     ] = (Method.superposition),
     tracks: Annotated[
-        Tracks, typer.Option(help="Left/right wheel tracks: independent, identical or correlated.")
+        Tracks,
+        typer.Option(help="Left/right wheel tracks: independent, identical, correlated (one coefficient at "
+                     "every wavelength) or isotropic (coherent at long wavelengths, as on a surface rough "
+                     "alike in every direction)."),
     ] = (Tracks.independent),
     track_correlation: Annotated[
         float, typer.Option(help="Left/right correlation coefficient for --tracks correlated (0–1).")
     ] = 0.5,
+    track_spacing: Annotated[
+        float, typer.Option(help="Distance between the wheel tracks for --tracks isotropic, m (0–5).")
+    ] = 1.62,
     spec: Annotated[
         Path | None,
         typer.Option(
@@ -183,7 +190,8 @@ def road_command(
         road_spec = parse_road_spec(_load_mapping(spec, "--spec"))
     else:
         road_spec = _spec_from_options(
-            road_class, length, spacing, gd_n0, waviness, method.value, tracks.value, track_correlation
+            road_class, length, spacing, gd_n0, waviness, method.value, tracks.value, track_correlation,
+            track_spacing,
         )
     if road_spec.length_m < MIN_RECOMMENDED_LENGTH_M:
         _warn(
@@ -212,6 +220,7 @@ def _spec_from_options(
     method: str,
     tracks: str,
     track_correlation: float,
+    track_spacing: float = 1.62,
 ) -> RoadSpec:
     from suvtwin.roads.iso8608 import CLASSES, class_bounds
     from suvtwin.roads.spec import RoadSpec, SegmentSpec
@@ -250,6 +259,8 @@ def _spec_from_options(
         )
     if not 0.0 <= track_correlation <= 1.0:
         raise InputError(f"--track-correlation must be in [0, 1], got {track_correlation:g}")
+    if not 0.0 < track_spacing <= 5.0:
+        raise InputError(f"--track-spacing must be in (0, 5] m, got {track_spacing:g}")
     return RoadSpec(
         segments=[
             SegmentSpec(
@@ -263,6 +274,7 @@ def _spec_from_options(
         method=method,
         tracks=tracks,
         track_correlation=track_correlation,
+        track_spacing_m=track_spacing,
     )
 
 

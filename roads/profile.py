@@ -32,8 +32,13 @@ vectorized (no per-sample Python loop):
 Segments are generated independently and joined by a power-complementary
 (cos/sin) cross-fade of ``transition_m``, so the profile has no step at a
 class change and its variance does not dip. Left/right tracks are independent,
-identical, or correlated with coefficient ρ at every wavelength
-(:math:`z_r = \rho z_l + \sqrt{1-\rho^2} z_2`, which keeps each track's PSD).
+identical, correlated with coefficient ρ at every wavelength
+(:math:`z_r = \rho z_l + \sqrt{1-\rho^2} z_2`, which keeps each track's PSD), or
+``isotropic``: two parallel lines a distance B apart on a surface whose roughness is the same in
+every direction (the isotropic road of Dodds & Robson 1973 [4]_), whose coherence falls with the
+wavelength as :func:`isotropic_coherence` gives; built line by line in the frequency domain,
+:math:`Z_r(n) = \gamma(n) Z_l(n) + \sqrt{1-\gamma(n)^2}\,Z_2(n)` (the construction of Liu et al.
+2015 [5]_ for a given coherence function).
 
 References
 ----------
@@ -42,11 +47,17 @@ References
    doi:10.3390/machines10121221
 .. [2] Lin et al., "Vertical vehicle dynamics estimated inputs", 2021.
 .. [3] ISO 8608:2016, "Mechanical vibration — Road surface profiles".
+.. [4] C. J. Dodds, J. D. Robson, "The description of road surface roughness", J. Sound Vib.
+   31(2), 175–183, 1973.
+.. [5] X. Liu, H. Wang, Y. Shan, T. He, "Construction of road roughness in left and right wheel
+   paths based on PSD and coherence function", Mech. Syst. Signal Process., 2015.
+   doi:10.1016/j.ymssp.2015.01.034
 """
 
 from __future__ import annotations
 
 import json
+import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -63,6 +74,7 @@ __all__ = [
     "SHAPE_FILTER_ALPHA",
     "Road",
     "add_obstacles",
+    "isotropic_coherence",
     "fast_fft_length",
     "generate_road",
     "obstacle_profile",
@@ -75,6 +87,10 @@ __all__ = [
 
 SHAPE_FILTER_ALPHA = 0.127
 """Shape-filter low-frequency cut-off α, rad/m (Brancati & Tufano 2022, §2)."""
+
+_ISOTROPIC_PAD_M = 60.0
+"""Length added to each end of an isotropic segment's draws before their tracks are mixed in the
+frequency domain, then cut, m: the mixing's kernel spans a few track spacings."""
 
 _METADATA_KEY = b"suvtwin.road"
 _COLUMNS = ("x_m", "z_left_m", "z_right_m")
@@ -341,11 +357,14 @@ def _segment_tracks(
     """Left and right profile of one segment, shape (2, n_samples), m."""
     segment = spec.segments[segment_index]
     n_draw = 1 if spec.tracks == "identical" else 2
+    # isotropic tracks are mixed in the frequency domain over longer draws, cropped: no wrap at the ends
+    pad = int(math.ceil(_ISOTROPIC_PAD_M / spec.spacing_m)) if spec.tracks == "isotropic" else 0
     if spec.method == "shape-filter":
-        draws = shape_filter_profile(n_samples, spec.spacing_m, gd_n0=segment.level, rng=rng, n_tracks=n_draw)
+        draws = shape_filter_profile(n_samples + 2 * pad, spec.spacing_m, gd_n0=segment.level, rng=rng,
+                                     n_tracks=n_draw)  # fmt: skip
     else:
         draws = superposition_profile(
-            n_samples,
+            n_samples + 2 * pad,
             spec.spacing_m,
             gd_n0=segment.level,
             waviness=segment.waviness,
@@ -359,7 +378,52 @@ def _segment_tracks(
     if spec.tracks == "correlated":
         rho = spec.track_correlation
         return np.vstack([draws[0], rho * draws[0] + np.sqrt(1.0 - rho**2) * draws[1]])
+    if spec.tracks == "isotropic":
+        return _isotropic_pair(draws[:, : n_samples + 2 * pad], spec.spacing_m, spec.track_spacing_m,
+                               segment.waviness)[:, pad : pad + n_samples]  # fmt: skip
     return draws
+
+
+def _isotropic_pair(
+    draws: np.ndarray, spacing_m: float, track_spacing_m: float, waviness: float
+) -> np.ndarray:
+    r"""Two independent draws (2, n) made into the left and right lines of an isotropic surface:
+    the right line's spectrum :math:`\gamma Z_l + \sqrt{1-\gamma^2} Z_2` per spatial frequency
+    (:func:`isotropic_coherence`), circular over the draws (the caller pads and crops them)."""
+    n = draws.shape[1]
+    spectra = np.fft.rfft(draws, axis=1)
+    gamma = isotropic_coherence(np.fft.rfftfreq(n, spacing_m), track_spacing_m, waviness)
+    right = np.fft.irfft(gamma * spectra[0] + np.sqrt(1.0 - gamma**2) * spectra[1], n=n)
+    return np.vstack([draws[0], right])
+
+
+def isotropic_coherence(n: npt.ArrayLike, track_spacing_m: float, waviness: float = 2.0) -> np.ndarray:
+    r"""Coherence of two parallel lines a distance B apart on an isotropic road, at spatial frequency n.
+
+    A surface whose roughness is the same in every direction and whose profile along any line has
+    the displacement PSD :math:`G_d(n) \propto n^{-w}` has the two-dimensional spectrum
+    :math:`\propto (n^2 + m^2)^{-(w+1)/2}` (n along, m across the road; Dodds & Robson 1973 [4]_).
+    The cross spectrum of two lines B apart is its integral over m weighted by
+    :math:`\cos(2\pi m B)`, the PSD of one line the plain integral; their ratio (G. N. Watson's
+    integral of :math:`\cos(bm)/(n^2+m^2)^{s}`) is
+
+    .. math:: \gamma(n) = \frac{2^{1-\nu}}{\Gamma(\nu)}\,x^{\nu} K_\nu(x), \qquad
+       x = 2\pi n B,\quad \nu = w/2,
+
+    K_ν the modified Bessel function of the second kind: 1 at n = 0, falling with n B (for w = 2,
+    :math:`x K_1(x)`: 0.98 at 100 m wavelengths, 0.59 at 10 m, 0.13 at 3.5 m, on tracks 1.62 m apart). Real
+    and positive (the lines' spectra are in phase); `n` in cycles/m."""
+    if not (np.isfinite(track_spacing_m) and track_spacing_m > 0):
+        raise InputError(f"track_spacing_m must be > 0 m, got {track_spacing_m!r}")
+    if not 1.0 <= waviness <= 3.5:
+        raise InputError(f"waviness must be in [1, 3.5], got {waviness!r}")
+    import scipy.special  # here: only this option needs it
+
+    nu = 0.5 * waviness
+    x = 2.0 * np.pi * np.abs(np.asarray(n, dtype=float)) * track_spacing_m
+    with np.errstate(invalid="ignore", over="ignore"):
+        gamma = 2.0 ** (1.0 - nu) / scipy.special.gamma(nu) * x**nu * scipy.special.kv(nu, x)
+    return np.where(x > 0.0, np.nan_to_num(gamma, nan=0.0), 1.0)
 
 
 def _fade_weight(x: np.ndarray, bounds: np.ndarray, i: int, half_fade: float) -> np.ndarray:

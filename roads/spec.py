@@ -110,9 +110,12 @@ class RoadSpec(BaseModel):
     segments: list[SegmentSpec] = Field(min_length=1)
     spacing_m: float = Field(default=0.02, gt=0.0, le=MAX_SPACING_M, description="grid spacing along x, m")
     method: Literal["shape-filter", "superposition"] = "superposition"
-    tracks: Literal["independent", "identical", "correlated"] = "independent"
+    tracks: Literal["independent", "identical", "correlated", "isotropic"] = "independent"
     track_correlation: float = Field(
         default=0.5, ge=0.0, le=1.0, description="left/right correlation for 'correlated', -"
+    )
+    track_spacing_m: float = Field(
+        default=1.62, gt=0.0, le=5.0, description="distance between the wheel tracks for 'isotropic', m"
     )
     n_min: float = Field(default=0.01, gt=0.0, description="lowest generated frequency, cycles/m")
     n_max: float = Field(default=10.0, gt=0.0, description="highest generated frequency, cycles/m")

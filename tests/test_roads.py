@@ -12,6 +12,7 @@ from suvtwin.roads.iso8608 import CLASSES, class_bounds, class_level, displaceme
 from suvtwin.roads.profile import (
     SHAPE_FILTER_ALPHA,
     generate_road,
+    isotropic_coherence,
     obstacle_profile,
     read_road,
     shape_filter_intensity,
@@ -248,3 +249,36 @@ def test_fixed_slope_fit_recovers_an_iso_power_law(gd_n0):
     fit = fit_iso(n, displacement_psd(n, gd_n0=gd_n0))
     assert fit.gd_n0 == pytest.approx(gd_n0, rel=5e-3)
     assert fit.waviness == pytest.approx(2.0, abs=2e-3)
+
+
+@pytest.mark.parametrize("waviness", [1.7, 2.0, 2.5])
+def test_isotropic_coherence_is_the_isotropic_surfaces_integral(waviness):
+    # the closed form (Watson's integral: a Matérn function of 2πnB) against the two-dimensional
+    # spectrum (n² + m²)^−(w+1)/2 integrated across the road with and without the cos(2πmB) of two
+    # lines B apart, by quadrature
+    b, s = 1.62, 0.5 * (waviness + 1.0)
+    for n in (0.02, 0.05, 0.1, 0.3, 0.8):
+        spectrum = lambda m, n=n: (n * n + m * m) ** -s  # noqa: E731
+        cross = integrate.quad(spectrum, 0.0, np.inf, weight="cos", wvar=2 * np.pi * b)[0]
+        line = integrate.quad(spectrum, 0.0, np.inf)[0]
+        assert isotropic_coherence(n, b, waviness) == pytest.approx(cross / line, rel=1e-6, abs=1e-9)
+    assert isotropic_coherence(0.0, b, waviness) == 1.0
+    assert np.all(np.diff(isotropic_coherence(np.linspace(0.0, 3.0, 50), b, waviness)) < 0)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_isotropic_tracks_have_the_isotropic_coherence_and_each_its_psd(method):
+    spec = _road("C", 4000.0, method, tracks="isotropic", track_spacing_m=1.62)
+    road = generate_road(spec, seed=3)
+    left, right = road.z
+    f, pxy = scipy.signal.csd(left, right, fs=50.0, nperseg=4096)
+    _, pxx = scipy.signal.welch(left, fs=50.0, nperseg=4096)
+    _, pyy = scipy.signal.welch(right, fs=50.0, nperseg=4096)
+    for lo, hi in ((0.03, 0.06), (0.08, 0.12), (0.2, 0.3), (0.5, 0.8)):
+        band = (f >= lo) & (f < hi)
+        measured = pxy[band].real.sum() / np.sqrt(pxx[band].sum() * pyy[band].sum())
+        expected = np.average(isotropic_coherence(f[band], 1.62), weights=pxx[band])
+        assert measured == pytest.approx(expected, abs=0.08)
+    assert right.std() == pytest.approx(left.std(), rel=0.2)
+    band = (f > 0.1) & (f < 5)
+    assert np.median(pyy[band] / pxx[band]) == pytest.approx(1.0, rel=0.15)
