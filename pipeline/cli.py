@@ -25,7 +25,14 @@ import typer
 
 from suvtwin.errors import InputError, RunError
 from suvtwin.pipeline.estimator_registry import estimator_families, estimator_help, road_inputs
-from suvtwin.roads.limits import MAX_ROAD_LENGTH_M, MAX_ROAD_SAMPLES, MAX_SPACING_M, MIN_RECOMMENDED_LENGTH_M
+from suvtwin.roads.limits import (
+    MAX_ROAD_LENGTH_M,
+    MAX_ROAD_SAMPLES,
+    MAX_SPACING_M,
+    MAX_TRACK_SPACING_M,
+    MIN_RECOMMENDED_LENGTH_M,
+    TRACK_SPACING_M,
+)
 
 if TYPE_CHECKING:
     from suvtwin.roads.spec import RoadSpec
@@ -164,8 +171,10 @@ def road_command(
         float, typer.Option(help="Left/right correlation coefficient for --tracks correlated (0–1).")
     ] = 0.5,
     track_spacing: Annotated[
-        float, typer.Option(help="Distance between the wheel tracks for --tracks isotropic, m (0–5).")
-    ] = 1.62,
+        float,
+        typer.Option(help=f"Distance between the wheel tracks for --tracks isotropic, m "
+                     f"(0–{MAX_TRACK_SPACING_M:g})."),
+    ] = TRACK_SPACING_M,
     spec: Annotated[
         Path | None,
         typer.Option(
@@ -220,7 +229,7 @@ def _spec_from_options(
     method: str,
     tracks: str,
     track_correlation: float,
-    track_spacing: float = 1.62,
+    track_spacing: float,
 ) -> RoadSpec:
     from suvtwin.roads.iso8608 import CLASSES, class_bounds
     from suvtwin.roads.spec import RoadSpec, SegmentSpec
@@ -259,8 +268,8 @@ def _spec_from_options(
         )
     if not 0.0 <= track_correlation <= 1.0:
         raise InputError(f"--track-correlation must be in [0, 1], got {track_correlation:g}")
-    if not 0.0 < track_spacing <= 5.0:
-        raise InputError(f"--track-spacing must be in (0, 5] m, got {track_spacing:g}")
+    if not 0.0 < track_spacing <= MAX_TRACK_SPACING_M:
+        raise InputError(f"--track-spacing must be in (0, {MAX_TRACK_SPACING_M:g}] m, got {track_spacing:g}")
     return RoadSpec(
         segments=[
             SegmentSpec(

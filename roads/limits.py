@@ -8,7 +8,14 @@ the command line can state them in its help without loading either.
 
 from __future__ import annotations
 
-__all__ = ["MAX_ROAD_LENGTH_M", "MAX_ROAD_SAMPLES", "MAX_SPACING_M", "MIN_RECOMMENDED_LENGTH_M"]
+__all__ = [
+    "MAX_ROAD_LENGTH_M",
+    "MAX_ROAD_SAMPLES",
+    "MAX_SPACING_M",
+    "MAX_TRACK_SPACING_M",
+    "MIN_RECOMMENDED_LENGTH_M",
+    "TRACK_SPACING_M",
+]
 
 MAX_SPACING_M = 0.05
 """Coarsest grid spacing, m: its Nyquist frequency 1/(2·0.05) = 10 cycles/m is the
@@ -23,3 +30,10 @@ MAX_ROAD_LENGTH_M = 200_000.0
 MAX_ROAD_SAMPLES = 20_000_000
 """Most grid points of a road (length/spacing + 1): two tracks of 20 million float64 samples are
 320 MB, the most a road may take in memory (200 km at 0.01 m)."""
+
+TRACK_SPACING_M = 1.62
+"""Default distance between a road's two wheel tracks for isotropic tracks, m: the SUV's mean track
+(1.606 m front, 1.636 m rear)."""
+
+MAX_TRACK_SPACING_M = 5.0
+"""Widest distance between the two wheel tracks, m."""

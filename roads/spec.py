@@ -19,7 +19,14 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from suvtwin.errors import InputError, cut
 from suvtwin.roads.iso8608 import CLASSES, class_bounds, class_level, class_of_level
-from suvtwin.roads.limits import MAX_ROAD_LENGTH_M, MAX_ROAD_SAMPLES, MAX_SPACING_M, MIN_RECOMMENDED_LENGTH_M
+from suvtwin.roads.limits import (
+    MAX_ROAD_LENGTH_M,
+    MAX_ROAD_SAMPLES,
+    MAX_SPACING_M,
+    MAX_TRACK_SPACING_M,
+    MIN_RECOMMENDED_LENGTH_M,
+    TRACK_SPACING_M,
+)
 
 __all__ = [
     "MAX_SPACING_M",
@@ -115,8 +122,9 @@ class RoadSpec(BaseModel):
         default=0.5, ge=0.0, le=1.0, description="left/right correlation for 'correlated', -"
     )
     track_spacing_m: float = Field(
-        default=1.62, gt=0.0, le=5.0, description="distance between the wheel tracks for 'isotropic', m"
-    )
+        default=TRACK_SPACING_M, gt=0.0, le=MAX_TRACK_SPACING_M,
+        description="distance between the wheel tracks for 'isotropic', m",
+    )  # fmt: skip
     n_min: float = Field(default=0.01, gt=0.0, description="lowest generated frequency, cycles/m")
     n_max: float = Field(default=10.0, gt=0.0, description="highest generated frequency, cycles/m")
     transition_m: float = Field(
