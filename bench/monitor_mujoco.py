@@ -1,13 +1,15 @@
 """The four-corner tyre-pressure monitor (issue 12) on MuJoCo ground truth, one scenario set at a time.
 
 Run: ``python bench/monitor_mujoco.py --set constant --runs 100 [--first 0] [--jobs 2]
-[--corner-model roll_plane] [--no-preview] [--road-waviness free] [--dead-sensor COLUMN]`` — prints
+[--corner-model roll_plane] [--no-preview] [--road-waviness free] [--dead-sensor COLUMN]
+[--road-method shape-filter]`` — prints
 JSON (``--first``: the set's runs from that one on, e.g. 5000 for runs no default call draws, to see
 a score is not the draw's; ``--corner-model``: the
 monitor's corner model, default the full car; ``--road-waviness``: its prior on the road's
 waviness, default ``iso``; ``--no-preview``: each tyre on its own, without the front→rear preview
 that ``suvtwin monitor`` uses by default; ``--dead-sensor``: a column of each run file NaN
-throughout, e.g. ``rl_wheel_speed_radps``).
+throughout, e.g. ``rl_wheel_speed_radps``; ``--road-method``: every run's road drawn by that
+generator instead of the set's, e.g. ``shape-filter``, a Gaussian process).
 Sets (:mod:`suvtwin.pipeline.monitor_scenarios`): ``constant``, ``slow_leak``, ``drop``,
 ``low_speed``, ``warning``, ``nominal_long``, ``reset_leak`` (ours: UN R141's procedure, the
 references learned after a reset and a 20 % leak later), ``warning_multi`` (ours: two or three tyres
@@ -41,7 +43,7 @@ from pathlib import Path
 
 import numpy as np
 
-from suvtwin.pipeline.monitor_scenarios import SETS, monitor_traces, scenario_set, simulate_cached
+from suvtwin.pipeline.monitor_scenarios import SETS, BenchRun, monitor_traces, scenario_set, simulate_cached
 from suvtwin.pipeline.monitor_scoring import issue_targets, score_set
 
 ISSUE_SIZE = {"constant": 100, "slow_leak": 20, "drop": 20, "low_speed": 20, "warning": 100,
@@ -143,6 +145,16 @@ def _round(obj, digits: int = 4):
     return obj
 
 
+def _with_road_method(run: BenchRun, method: str) -> BenchRun:
+    """The run with its road drawn by `method` (:class:`suvtwin.roads.spec.RoadSpec`'s ``method``)."""
+    from suvtwin.pipeline.scenario import parse_scenario
+
+    data = run.scenario.model_dump(mode="json", exclude_none=True)
+    data["road"]["method"] = method
+    return BenchRun(run.name, run.set, parse_scenario(data, source=f"bench run {run.name}, {method}"),
+                    {**run.info, "road_method": method})  # fmt: skip
+
+
 def main(argv: list[str] | None = None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     add = parser.add_argument
@@ -171,12 +183,16 @@ def main(argv: list[str] | None = None) -> dict:
         help="each tyre on its own (default: each track's two tyres fused through its front→rear preview)")
     add("--dead-sensor", default=None, metavar="COLUMN",
         help="monitor with this column of each run file NaN throughout (e.g. rl_wheel_speed_radps)")
+    add("--road-method", default=None, choices=("superposition", "shape-filter"),
+        help="every run's road drawn by this generator (default: the set's, superposition)")
     add("--discard-runs", action="store_true", help="delete run files once monitored")
     add("--simulate-only", action="store_true", help="fill the run cache, run no monitor")
     args = parser.parse_args(argv)
 
     runs = scenario_set(args.set, args.runs, duration_s=args.duration, loss=args.loss, first=args.first,
                         weave_every=args.weave_every, weave_duration_s=args.weave_duration)  # fmt: skip
+    if args.road_method is not None:
+        runs = [_with_road_method(r, args.road_method) for r in runs]
     if args.reset_at is not None:
         for r in runs:
             r.info.pop("placard_kpa", None)
