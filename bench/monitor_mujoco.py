@@ -9,7 +9,7 @@ monitor's corner model, default the full car; ``--road-waviness``: its prior on 
 waviness, default ``iso``; ``--no-preview``: each tyre on its own, without the front→rear preview
 that ``suvtwin monitor`` uses by default; ``--dead-sensor``: a column of each run file NaN
 throughout, e.g. ``rl_wheel_speed_radps``; ``--road-method``: every run's road drawn by that
-generator instead of the set's, e.g. ``shape-filter``, a Gaussian process).
+generator instead of the set's, e.g. ``gaussian`` or ``shape-filter``, Gaussian processes).
 Sets (:mod:`suvtwin.pipeline.monitor_scenarios`): ``constant``, ``slow_leak``, ``drop``,
 ``low_speed``, ``warning``, ``nominal_long``, ``reset_leak`` (ours: UN R141's procedure, the
 references learned after a reset and a 20 % leak later), ``warning_multi`` (ours: two or three tyres
@@ -183,7 +183,7 @@ def main(argv: list[str] | None = None) -> dict:
         help="each tyre on its own (default: each track's two tyres fused through its front→rear preview)")
     add("--dead-sensor", default=None, metavar="COLUMN",
         help="monitor with this column of each run file NaN throughout (e.g. rl_wheel_speed_radps)")
-    add("--road-method", default=None, choices=("superposition", "shape-filter"),
+    add("--road-method", default=None, choices=("superposition", "shape-filter", "gaussian"),
         help="every run's road drawn by this generator (default: the set's, superposition)")
     add("--discard-runs", action="store_true", help="delete run files once monitored")
     add("--simulate-only", action="store_true", help="fill the run cache, run no monitor")

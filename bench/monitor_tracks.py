@@ -11,7 +11,8 @@ tracks as each value of `--tracks` gives (the simulator's ``tracks``: ``independ
 :func:`suvtwin.roads.profile.isotropic_coherence`; or, tracks independent, the
 road drawn by the first-order shape filter, ``shape-filter``, a Gaussian process, instead of by
 sinusoid superposition, or with ``obstacles``: a 5 cm, 0.6 m pothole under the left track at 150 m
-and an 8 cm, 3 m sine bump under both at 300 m), simulated into
+and an 8 cm, 3 m sine bump under both at 300 m; or any of the road's fields, ``key=value`` joined by
+``+``, e.g. ``method=gaussian`` or ``n_max=25``), simulated into
 ``bench/_runs/tracks_<value>/`` (reused on a second call; ``independent`` is the ``constant`` set's
 own cache) and monitored (:func:`suvtwin.pipeline.monitoring.monitor_run`) with each value of
 `--coherence`: ``estimated`` (the default monitor: the tracks' coherence read online from the two
@@ -58,10 +59,13 @@ def road_of(value: str) -> dict:
         return {"method": "shape-filter"}
     if value == "obstacles":
         return {"obstacles": OBSTACLES}
+    if "=" in value:  # road fields, e.g. n_max=25 or method=shape-filter+n_max=10
+        fields = dict(item.split("=", 1) for item in value.split("+"))
+        return {k: v if k in ("method", "tracks") else float(v) for k, v in fields.items()}
     kind, _, rho = value.partition(":")
     if kind != "correlated" or not rho:
-        raise SystemExit("--tracks values are independent, identical, isotropic, correlated:ρ, shape-filter "
-                         f"or obstacles, got {value!r}")  # fmt: skip
+        raise SystemExit("--tracks values are independent, identical, isotropic, correlated:ρ, "
+                         f"shape-filter, obstacles or road fields (n_max=25+method=gaussian), got {value!r}")
     return {"tracks": "correlated", "track_correlation": float(rho)}
 
 
@@ -99,7 +103,8 @@ def main(argv: list[str] | None = None) -> dict:
     for value in args.tracks.split(","):
         road = road_of(value)
         runs = [with_tracks(r, road) for r in base]
-        folder = here / ("constant" if value == "independent" else f"tracks_{value.replace(':', '_')}")
+        folder = here / ("constant" if value == "independent"
+                         else "tracks_" + value.replace(":", "_").replace("=", "").replace("+", "_"))
         paths, _ = simulate_cached(runs, folder, jobs=args.jobs)
         good = [i for i, p in enumerate(paths) if p is not None]
         runs, paths = [runs[i] for i in good], [paths[i] for i in good]

@@ -59,6 +59,7 @@ app = typer.Typer(
 class Method(StrEnum):
     shape_filter = "shape-filter"
     superposition = "superposition"
+    gaussian = "gaussian"
 
 
 class Tracks(StrEnum):
@@ -156,10 +157,11 @@ def road_command(
         ),
     ] = None,
     waviness: Annotated[
-        float, typer.Option(help="PSD exponent w (1–3.5; ISO classes use 2; superposition only if ≠ 2).")
+        float, typer.Option(help="PSD exponent w (1–3.5; ISO classes use 2; not the shape filter if ≠ 2).")
     ] = 2.0,
     method: Annotated[
-        Method, typer.Option(help="Generator: paper 000's shape filter or sinusoid superposition.")
+        Method, typer.Option(help="Generator: paper 000's shape filter, sinusoid superposition (random "
+                             "phases, fixed amplitudes) or gaussian (random amplitudes too: Gaussian).")
     ] = (Method.superposition),
     tracks: Annotated[
         Tracks,
@@ -264,7 +266,7 @@ def _spec_from_options(
         raise InputError(f"--waviness must be in [1, 3.5], got {waviness:g}")
     if waviness != 2.0 and method == "shape-filter":
         raise InputError(
-            "--waviness other than 2 needs --method superposition (the shape filter makes w = 2)"
+            "--waviness other than 2 needs --method superposition or gaussian (the shape filter makes w = 2)"
         )
     if not 0.0 <= track_correlation <= 1.0:
         raise InputError(f"--track-correlation must be in [0, 1], got {track_correlation:g}")

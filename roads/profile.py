@@ -2,7 +2,7 @@ r"""ISO 8608 random road profiles on two wheel tracks, with segments and obstacl
 
 Usual call: ``road = generate_road(RoadSpec(segments=[SegmentSpec(length_m=300, road_class="C")]), seed=7)``.
 
-Two generators, both seeded by a :class:`numpy.random.Generator`, both
+Three generators, each seeded by a :class:`numpy.random.Generator`, each
 vectorized (no per-sample Python loop):
 
 ``shape-filter``
@@ -27,7 +27,22 @@ vectorized (no per-sample Python loop):
     line's bin, so the profile variance equals the integral of the target PSD
     over the band exactly (eq. 31's :math:`A_i = \sqrt{2\Phi(n_i)\Delta n}`
     overstates it by ~30 % at the 0.01 cycle/m edge, where the PSD is steep).
-    Any waviness w is possible.
+    Any waviness w is possible. Every line's amplitude is fixed; only its phase is random, so over
+    the road's length the profile's periodogram *is* the target PSD, line for line (the random-phase
+    spectral representation is ergodic in its autocorrelation over its period: Shinozuka & Deodatis
+    1991 [6]_): averaged over a few windows of a road it converges to the PSD far faster than a
+    measured road's would (over 8 windows of 160 m, hop 80 m, band means of 0.025 cycles/m at
+    0.1–2 cycles/m scatter by 0.15 against 0.22–0.23 for the two Gaussian generators' roads, over
+    13 windows 0.075 against 0.18; on one window alike, 0.45–0.48; ``tests/test_roads.py``), which
+    flatters any estimator that reads a road's spectrum.
+
+``gaussian``
+    The same superposition with random amplitudes: each line's coefficient
+    :math:`a_i\cos + b_i\sin` with :math:`a_i, b_i \sim \mathcal N(0, A_i^2/2)` independent
+    (Rice 1944 [7]_), i.e. a Rayleigh amplitude and a uniform phase. The profile is then a stationary
+    Gaussian process with the ISO PSD (any waviness, the band of ``superposition``), and its
+    periodogram scatters as a Gaussian process's does (each line's power exponentially distributed
+    about the PSD): the road for validating estimators that read the road's spectrum.
 
 Segments are generated independently and joined by a power-complementary
 (cos/sin) cross-fade of ``transition_m``, so the profile has no step at a
@@ -52,6 +67,9 @@ References
 .. [5] X. Liu, H. Wang, Y. Shan, T. He, "Construction of road roughness in left and right wheel
    paths based on PSD and coherence function", Mech. Syst. Signal Process., 2015.
    doi:10.1016/j.ymssp.2015.01.034
+.. [6] M. Shinozuka, G. Deodatis, "Simulation of stochastic processes by spectral representation",
+   Appl. Mech. Rev. 44(4), 191–204, 1991.
+.. [7] S. O. Rice, "Mathematical analysis of random noise", Bell Syst. Tech. J. 23(3), 282–332, 1944.
 """
 
 from __future__ import annotations
@@ -189,6 +207,7 @@ def superposition_profile(
     n_min: float = 0.01,
     n_max: float = 10.0,
     n_tracks: int = 1,
+    random_amplitudes: bool = False,
 ) -> np.ndarray:
     r"""Road profile as a sum of sinusoids with random phases, m.
 
@@ -196,7 +215,9 @@ def superposition_profile(
     (Lin et al. 2021, eq. 31), on the lines :math:`n_i = i\,\Delta n` of an FFT
     grid inside ``[n_min, n_max]``, with
     :math:`A_i^2/2 = \int_{\text{bin } i} G_d(n)\,dn` (ISO 8608 PSD, bins clipped
-    to the band). Evaluated by one inverse real FFT.
+    to the band). Evaluated by one inverse real FFT. With `random_amplitudes`, each line is
+    :math:`a_i \cos(2\pi n_i x) + b_i \sin(2\pi n_i x)`, :math:`a_i, b_i \sim \mathcal N(0, A_i^2/2)`
+    (Rice 1944): the same PSD in expectation, a Gaussian process.
 
     Parameters
     ----------
@@ -214,6 +235,9 @@ def superposition_profile(
         Generated band, cycles/m (default 0.01–10).
     n_tracks : int, optional
         Number of independent profiles (default 1).
+    random_amplitudes : bool, optional
+        Draw each line's amplitude too (Rayleigh, a Gaussian road) instead of fixing it at
+        :math:`A_i` (default False, the random-phase road).
 
     Returns
     -------
@@ -230,6 +254,11 @@ def superposition_profile(
     bin_power = np.zeros_like(lines)
     bin_power[inside] = _psd_integral(lower[inside], upper[inside], gd_n0=gd_n0, waviness=waviness)
     amplitude = np.sqrt(2.0 * bin_power)
+    if random_amplitudes:
+        # X_k = (N/2) (a_k - i b_k) gives a_k cos(2π n_k x_j) + b_k sin(2π n_k x_j), a, b ~ N(0, A_k²/2)
+        a, b = rng.standard_normal((2, n_tracks, lines.size))
+        spectrum = (n_fft / 2.0) * amplitude / np.sqrt(2.0) * (a - 1j * b)
+        return np.fft.irfft(spectrum, n=n_fft, axis=-1)[:, :n_samples]
     phase = rng.uniform(0.0, 2.0 * np.pi, size=(n_tracks, lines.size))
     # irfft(X)[j] = (2/N) Re sum_k X_k exp(i 2π k j / N); X_k = (N/2) A_k exp(-i(ψ_k + π/2))
     # gives A_k sin(2π n_k x_j - ψ_k).
@@ -372,6 +401,7 @@ def _segment_tracks(
             n_max=spec.n_max,
             rng=rng,
             n_tracks=n_draw,
+            random_amplitudes=spec.method == "gaussian",
         )
     if spec.tracks == "identical":
         return np.vstack([draws[0], draws[0]])

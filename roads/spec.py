@@ -116,7 +116,7 @@ class RoadSpec(BaseModel):
 
     segments: list[SegmentSpec] = Field(min_length=1)
     spacing_m: float = Field(default=0.02, gt=0.0, le=MAX_SPACING_M, description="grid spacing along x, m")
-    method: Literal["shape-filter", "superposition"] = "superposition"
+    method: Literal["shape-filter", "superposition", "gaussian"] = "superposition"
     tracks: Literal["independent", "identical", "correlated", "isotropic"] = "independent"
     track_correlation: float = Field(
         default=0.5, ge=0.0, le=1.0, description="left/right correlation for 'correlated', -"
@@ -147,7 +147,7 @@ class RoadSpec(BaseModel):
                 if seg.waviness != 2.0:
                     raise ValueError(
                         f"segments[{i}].waviness = {seg.waviness}: the shape filter makes "
-                        "w = 2 only; use method 'superposition' for other waviness"
+                        "w = 2 only; use method 'superposition' or 'gaussian' for other waviness"
                     )
         if len(self.segments) > 1:
             shortest = min(seg.length_m for seg in self.segments)

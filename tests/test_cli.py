@@ -72,6 +72,19 @@ def test_gd_n0_and_waviness_reach_the_road(tmp_path, capsys):
     assert fit["waviness"] == pytest.approx(2.4, abs=0.15)
 
 
+def test_road_method_gaussian_with_other_waviness_reaches_the_road(tmp_path, capsys):
+    out = tmp_path / "g.parquet"
+    argv = ["road", "--gd-n0", "3e-4", "--waviness", "2.4", "--method", "gaussian", "--length", "2000",
+            "--seed", "3", "--out", str(out)]  # fmt: skip
+    assert main(argv) == 0
+    road = read_road(out)
+    assert road.spec.method == "gaussian" and road.spec.segments[0].waviness == 2.4
+    capsys.readouterr()
+    assert main(["classify", str(out), "--json"]) == 0
+    fit = json.loads(capsys.readouterr().out)["left"]
+    assert fit["waviness"] == pytest.approx(2.4, abs=0.2)
+
+
 def test_spec_file_with_segments_and_obstacles(tmp_path):
     spec = tmp_path / "road.yaml"
     spec.write_text(
@@ -98,7 +111,7 @@ BAD_ROAD_ARGS = [
     (["--class", "C", "--spacing", "0.1"], "--spacing must be ≤ 0.05 m"),
     (["--class", "C", "--gd-n0", "1e-3"], "outside class C"),
     (["--class", "C", "--waviness", "5"], "--waviness must be in [1, 3.5]"),
-    (["--class", "C", "--method", "shape-filter", "--waviness", "2.5"], "needs --method superposition"),
+    (["--class", "C", "--method", "shape-filter", "--waviness", "2.5"], "needs --method superposition or"),
     (["--class", "C", "--track-correlation", "1.5"], "--track-correlation must be in [0, 1]"),
     (["--class", "C", "--seed", "-1"], "--seed must be ≥ 0"),
     ([], "give --class"),

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 import scipy.fft
 import scipy.signal
+import scipy.stats
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import integrate
@@ -23,7 +24,7 @@ from suvtwin.roads.profile import (
 from suvtwin.roads.roughness import classify_profile, fit_iso, profile_psd
 from suvtwin.roads.spec import ObstacleSpec, RoadSpec, SegmentSpec
 
-METHODS = ("shape-filter", "superposition")
+METHODS = ("shape-filter", "superposition", "gaussian")
 N_SEEDS = 20
 
 
@@ -38,7 +39,7 @@ def _road(road_class="C", length=300.0, method="superposition", **kwargs):
 def _target_variance(spec: RoadSpec) -> float:
     """Variance the generator is designed to produce, by quadrature of its target PSD (m^2)."""
     seg = spec.segments[0]
-    if spec.method == "superposition":  # ISO PSD over the generated band
+    if spec.method in ("superposition", "gaussian"):  # ISO PSD over the generated band
         value, _ = integrate.quad(
             lambda n: displacement_psd(n, gd_n0=seg.level, waviness=seg.waviness),
             spec.n_min,
@@ -110,6 +111,79 @@ def test_superposition_equals_a_direct_sum_of_sines():
         expected += np.sqrt(2 * power) * np.sin(2 * np.pi * k * dn * x - phases[k])
     assert profile.size == n_samples
     np.testing.assert_allclose(profile, expected, rtol=0, atol=1e-9 * np.abs(expected).max())
+
+
+def test_gaussian_superposition_equals_rices_sum_of_random_cosines_and_sines():
+    # Rice 1944: z = sum_i a_i cos(2 pi n_i x) + b_i sin(2 pi n_i x), a_i, b_i ~ N(0, A_i^2/2), summed
+    # term by term against the generator's inverse FFT (its draws: a then b, one line each).
+    spacing, n_samples, gd_n0, w, n_min, n_max = 0.05, 400, 2e-4, 2.3, 0.2, 5.0
+    profile = superposition_profile(n_samples, spacing, gd_n0=gd_n0, waviness=w, n_min=n_min, n_max=n_max,
+                                    rng=np.random.default_rng(5), random_amplitudes=True)[0]  # fmt: skip
+    n_fft = scipy.fft.next_fast_len(max(n_samples, int(np.ceil(8.0 / (n_min * spacing)))), real=True)
+    dn = 1.0 / (n_fft * spacing)
+    n_lines = n_fft // 2 + 1
+    a, b = np.random.default_rng(5).standard_normal((2, 1, n_lines))[:, 0]
+    x = np.arange(n_samples) * spacing
+    expected = np.zeros(n_samples)
+    for k in range(1, n_lines):
+        lo, hi = max(k * dn - dn / 2, n_min), min(k * dn + dn / 2, n_max)
+        if hi <= lo or k >= n_fft / 2:
+            continue
+        power, _ = integrate.quad(lambda n: displacement_psd(n, gd_n0=gd_n0, waviness=w), lo, hi)
+        s = np.sqrt(power)  # the std of a_k and b_k: A_k / sqrt(2), A_k^2 / 2 = power
+        expected += s * (a[k] * np.cos(2 * np.pi * k * dn * x) + b[k] * np.sin(2 * np.pi * k * dn * x))
+    np.testing.assert_allclose(profile, expected, rtol=0, atol=1e-9 * np.abs(expected).max())
+
+
+def test_random_phase_lines_carry_their_power_exactly_and_gaussian_ones_exponentially():
+    # Over the generator's whole period a random-phase road's periodogram is its PSD line for line;
+    # a Gaussian road's line power is (a^2 + b^2)/2 of its mean: exponential, mean 1 (chi-square 2 / 2).
+    spacing, n_min = 0.02, 0.05
+    n = scipy.fft.next_fast_len(int(np.ceil(8.0 / (n_min * spacing))), real=True)  # no crop: one period
+    lines = np.fft.rfftfreq(n, spacing)
+    inside = (lines > n_min + 1 / (n * spacing)) & (lines < 9.9)
+    dn = 1.0 / (n * spacing)
+    lo, hi = lines[inside] - dn / 2, lines[inside] + dn / 2
+    expected = 1e-4 * 0.1**2 * (1 / lo - 1 / hi)  # A_k^2 / 2: Gd(n0) (n/n0)^-2 integrated over the bin
+    for random_amplitudes in (False, True):
+        z = superposition_profile(n, spacing, gd_n0=1e-4, n_min=n_min, rng=np.random.default_rng(11),
+                                  random_amplitudes=random_amplitudes)[0]  # fmt: skip
+        power = 2.0 * np.abs(np.fft.rfft(z)[inside] / n) ** 2  # each line's variance A_k^2 / 2
+        ratio = power / expected
+        if not random_amplitudes:
+            np.testing.assert_allclose(ratio, 1.0, rtol=1e-9)
+        else:
+            assert ratio.mean() == pytest.approx(1.0, abs=0.03)  # 1 / sqrt(~10^4 lines)
+            assert scipy.stats.kstest(ratio, "expon").pvalue > 0.01
+
+
+def test_a_random_phase_roads_spectrum_scatters_less_over_windows_than_a_gaussian_roads():
+    # The spectrum an estimator reads: band means (0.025 cycles/m wide, 0.1-2 cycles/m) of the slope's
+    # periodogram averaged over K consecutive 160 m windows (hop 80 m) of a 1200 m class C road, their
+    # scatter about the mean over roads. On one window the three generators scatter alike; over more,
+    # the random-phase road's converges to its PSD far faster than a Gaussian process's (its lines'
+    # amplitudes are fixed); the two Gaussian generators (shape filter, random amplitudes) agree.
+    def scatter(method, windows):
+        means = []
+        for seed in range(12):
+            road = generate_road(_road(None, 1200.0, method, gd_n0=2.56e-4), seed=seed)
+            slope = np.diff(road.z, axis=1) / road.spacing_m
+            starts = np.arange(windows) * 4000
+            segs = np.stack([slope[:, s : s + 8000] for s in starts], axis=1)
+            power = np.abs(np.fft.rfft(segs - segs.mean(-1, keepdims=True))) ** 2
+            n = np.fft.rfftfreq(8000, road.spacing_m)
+            band = np.digitize(n, np.arange(0.1, 2.0, 0.025))
+            avg = power.mean(1)
+            means.extend(np.stack([avg[:, band == b].mean(-1) for b in range(1, 76)], axis=-1))
+        means = np.array(means)
+        return float((means / means.mean(0)).std())
+
+    one = {m: scatter(m, 1) for m in METHODS}
+    eight = {m: scatter(m, 8) for m in METHODS}
+    assert one["superposition"] == pytest.approx(one["gaussian"], rel=0.2)
+    assert eight["gaussian"] == pytest.approx(eight["shape-filter"], rel=0.2)
+    assert eight["superposition"] < 0.75 * eight["gaussian"]
+    assert scatter("superposition", 13) < 0.5 * scatter("gaussian", 13)
 
 
 def test_shape_filter_autocovariance_is_the_analytic_exponential():
