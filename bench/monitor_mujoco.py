@@ -9,7 +9,8 @@ monitor's corner model, default the full car; ``--road-waviness``: its prior on 
 waviness, default ``iso``; ``--no-preview``: each tyre on its own, without the front→rear preview
 that ``suvtwin monitor`` uses by default; ``--dead-sensor``: a column of each run file NaN
 throughout, e.g. ``rl_wheel_speed_radps``; ``--road-method``: every run's road drawn by that
-generator instead of the set's, e.g. ``gaussian`` or ``shape-filter``, Gaussian processes).
+generator instead of the set's ``gaussian``, e.g. ``superposition``, the simulator's default
+random-phase roads the sets drew before 2026-12-04, which flatter the monitor, or ``shape-filter``).
 Sets (:mod:`suvtwin.pipeline.monitor_scenarios`): ``constant``, ``slow_leak``, ``drop``,
 ``low_speed``, ``warning``, ``nominal_long``, ``reset_leak`` (ours: UN R141's procedure, the
 references learned after a reset and a 20 % leak later), ``warning_multi`` (ours: two or three tyres
@@ -184,7 +185,7 @@ def main(argv: list[str] | None = None) -> dict:
     add("--dead-sensor", default=None, metavar="COLUMN",
         help="monitor with this column of each run file NaN throughout (e.g. rl_wheel_speed_radps)")
     add("--road-method", default=None, choices=("superposition", "shape-filter", "gaussian"),
-        help="every run's road drawn by this generator (default: the set's, superposition)")
+        help="every run's road drawn by this generator (default: the set's, gaussian)")
     add("--discard-runs", action="store_true", help="delete run files once monitored")
     add("--simulate-only", action="store_true", help="fill the run cache, run no monitor")
     args = parser.parse_args(argv)

@@ -40,6 +40,9 @@ def test_constant_set_spans_its_ranges_with_levels_anywhere_in_the_band():
     v = np.array([r.scenario.speed_kmh for r in runs])
     assert 40.0 <= v.min() < 50.0 and 110.0 < v.max() <= 120.0
     assert {r.info["road_class"] for r in runs} == set("ABCD")
+    # Gaussian roads: the default random-phase ones have a spectrum that flatters the monitor
+    assert all(r.scenario.road.method == "gaussian" for r in runs)
+    assert all(r.scenario.road.method == "gaussian" for r in scenario_set("nominal_long", 4))
     offsets = []
     for r in runs:
         level = r.scenario.road.segments[0].gd_n0
