@@ -10,7 +10,9 @@ simulated there if missing), each read from 5 s on (the start's transient left o
 parts from the SUV's parameter file with the run's loads (static travels and tyre loads), the
 accelerometers' noise the run records, the delay the wheelbase over the window's mean speed (the
 run's true speed). Printed per road class group (A–C, D): the error (estimate − truth, kPa) mean,
-std, median of its magnitude over the tyres with a usable window, and how many tyres had one.
+std, median of its magnitude over the tyres with a usable window, how many tyres had one, and (a
+probe of a σ for it) the share of them within ±2σ of a posterior exp(−(J − J_min)/2s), s = J_min over
+its degrees of freedom.
 """
 
 from __future__ import annotations
@@ -35,7 +37,7 @@ START_S = 5.0
 OTHER = {"fl": "fr", "fr": "fl", "rl": "rr", "rr": "rl"}
 
 
-def run_errors(path: Path, at_s: list[float], window_s: float) -> dict:
+def run_errors(path: Path, at_s: list[float], window_s: float, jacking: bool = True) -> dict:
     """Estimate − truth (kPa) of each tyre at each record length, NaN where no window was usable."""
     table = pq.read_table(path)
     meta = json.loads(table.schema.metadata[b"suvtwin.run"])
@@ -67,9 +69,9 @@ def run_errors(path: Path, at_s: list[float], window_s: float) -> dict:
                if "accel" in name and "true" not in name}  # fmt: skip
         sig = {c: corner_signals(col[f"{c}_accel_unsprung_mps2"], col[f"{c}_accel_sprung_mps2"],
                                  col[f"{OTHER[c]}_accel_unsprung_mps2"], col[f"{OTHER[c]}_accel_sprung_mps2"],
-                                 parts[c], dt=dt, parts_other=parts[OTHER[c]]) for c in CORNERS}  # fmt: skip
+                                 parts[c], dt=dt, jacking=jacking) for c in CORNERS}  # fmt: skip
         delay = vehicle.wheelbase / float(frame["speed_mps"].to_numpy()[keep].mean())
-        errors, used = {}, {}
+        errors, used, z = {}, {}, {}
         for f, r in (("fl", "rl"), ("fr", "rr")):
             fit = closure_objective(sig[f], sig[r], delay_s=delay, dt=dt, stiffness_grid=grid,
                                     tyre_damping=damping, noise_sigma=noise, window_s=window_s)  # fmt: skip
@@ -77,8 +79,24 @@ def run_errors(path: Path, at_s: list[float], window_s: float) -> dict:
                 truth = float(frame[f"{c}_pressure_kpa"].to_numpy()[keep][-1])
                 errors[c] = float(pressures[fit.best[j]] - truth) if fit.best else float("nan")
                 used[c] = [fit.windows_used, fit.windows]
-        out[f"{at:g}s"] = {"error_kpa": errors, "windows": used}
+                z[c] = _z_score(fit, j, pressures, truth, window_s, dt) if fit.best else float("nan")
+        out[f"{at:g}s"] = {"error_kpa": errors, "windows": used, "z": z}
     return out
+
+
+def _z_score(fit, j: int, pressures: np.ndarray, truth: float, window_s: float, dt: float) -> float:
+    """(estimate − truth)/σ with σ from exp(−(J − J_min)/(2 s)), s = J_min over its degrees of freedom
+    (2 per frequency and window, over 1.5 for the Hann window's overlap of neighbouring bins): J
+    scaled as if the model's error were white like the noise (a quasi-likelihood; a probe)."""
+    freq = np.fft.rfftfreq(int(round(window_s / dt)), dt)
+    dof = 2.0 * np.count_nonzero((freq > 0.5) & (freq < 20.0)) * fit.windows_used / 1.5
+    scale = max(fit.objective.min() / dof, 1.0)
+    post = np.exp(-(fit.objective - fit.objective.min()) / (2.0 * scale))
+    marginal = post.sum(axis=1 - j)
+    marginal /= marginal.sum()
+    mean = float(np.sum(marginal * pressures))
+    sigma = float(np.sqrt(np.sum(marginal * (pressures - mean) ** 2)))
+    return (mean - truth) / max(sigma, 0.5)
 
 
 def _summary(errors: np.ndarray) -> dict:
@@ -96,6 +114,8 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--runs", type=int, default=30, help="runs of the set (default 30)")
     parser.add_argument("--at", default="10,30", help="record lengths after the first 5 s, s (default 10,30)")
     parser.add_argument("--window", type=float, default=4.0, help="window length, s (default 4)")
+    parser.add_argument("--static-travel", action="store_true",
+                        help="the travel's mean at the loads' static travel (default: less the jacking)")
     args = parser.parse_args(argv)
     at_s = [float(a) for a in args.at.split(",")]
     runs = scenario_set(args.set, args.runs)
@@ -105,17 +125,24 @@ def main(argv: list[str] | None = None) -> dict:
     for run, path in zip(runs, paths, strict=True):
         if path is None:
             continue
-        per_run.append((run, run_errors(path, at_s, args.window)))
+        per_run.append((run, run_errors(path, at_s, args.window, not args.static_travel)))
         print(f"force_closure: {run.name}", file=sys.stderr, flush=True)
     out: dict = {"bench": "force_closure", "set": args.set, "runs": len(per_run), "window_s": args.window,
-                 "results": {}}  # fmt: skip
+                 "travel_mean": "static" if args.static_travel else "jacking", "results": {}}  # fmt: skip
     for at in at_s:
         key = f"{at:g}s"
         groups: dict[str, list] = {"A-C": [], "D": []}
+        zs: dict[str, list] = {"A-C": [], "D": []}
         for run, result in per_run:
             group = "D" if run.info["road_class"] == "D" else "A-C"
             groups[group] += [result[key]["error_kpa"][c] for c in CORNERS]
+            zs[group] += [result[key]["z"][c] for c in CORNERS]
         out["results"][key] = {g: _summary(np.array(v, dtype=float)) for g, v in groups.items()}
+        for g, v in zs.items():
+            z = np.array(v, dtype=float)
+            z = z[np.isfinite(z)]
+            if z.size:
+                out["results"][key][g]["inside_2sigma"] = round(float(np.mean(np.abs(z) <= 2.0)), 3)
     print(json.dumps(out, indent=1))
     return out
 

@@ -83,31 +83,32 @@ def test_superposition_reproduces_other_waviness(waviness):
     assert np.mean([f.gd_n0_free for f in fits]) == pytest.approx(3e-4, rel=0.10)
 
 
-def test_superposition_equals_a_direct_sum_of_sines():
-    # Lin et al. 2021 eq. 31 summed term by term, with each A_i^2/2 from quadrature of the ISO
-    # PSD over the line's bin, against the generator's single inverse FFT.
-    spacing, n_samples, gd_n0, w, n_min, n_max = 0.05, 400, 2e-4, 2.3, 0.2, 5.0
-    profile = superposition_profile(
-        n_samples,
-        spacing,
-        gd_n0=gd_n0,
-        waviness=w,
-        n_min=n_min,
-        n_max=n_max,
-        rng=np.random.default_rng(5),
-    )[0]
-    # the generator's grid: at least 8/n_min m, a fast FFT length
+def _line_powers(spacing, n_samples, gd_n0, w, n_min, n_max):
+    """The generator's lines (index k, spacing dn) with A_k^2/2 from quadrature of the ISO PSD over
+    each line's bin, and the number of lines of its grid (at least 8/n_min m, a fast FFT length)."""
     n_fft = scipy.fft.next_fast_len(max(n_samples, int(np.ceil(8.0 / (n_min * spacing)))), real=True)
     dn = 1.0 / (n_fft * spacing)
-    n_lines = n_fft // 2 + 1
-    phases = np.random.default_rng(5).uniform(0.0, 2.0 * np.pi, size=(1, n_lines))[0]
-    x = np.arange(n_samples) * spacing
-    expected = np.zeros(n_samples)
-    for k in range(1, n_lines):
+    lines = []
+    for k in range(1, n_fft // 2 + 1):
         lo, hi = max(k * dn - dn / 2, n_min), min(k * dn + dn / 2, n_max)
         if hi <= lo or k >= n_fft / 2:
             continue
         power, _ = integrate.quad(lambda n: displacement_psd(n, gd_n0=gd_n0, waviness=w), lo, hi)
+        lines.append((k, power))
+    return lines, dn, n_fft // 2 + 1
+
+
+def test_superposition_equals_a_direct_sum_of_sines():
+    # Lin et al. 2021 eq. 31 summed term by term, with each A_i^2/2 from quadrature of the ISO
+    # PSD over the line's bin, against the generator's single inverse FFT.
+    spacing, n_samples, gd_n0, w, n_min, n_max = 0.05, 400, 2e-4, 2.3, 0.2, 5.0
+    profile = superposition_profile(n_samples, spacing, gd_n0=gd_n0, waviness=w, n_min=n_min, n_max=n_max,
+                                    rng=np.random.default_rng(5))[0]  # fmt: skip
+    lines, dn, n_lines = _line_powers(spacing, n_samples, gd_n0, w, n_min, n_max)
+    phases = np.random.default_rng(5).uniform(0.0, 2.0 * np.pi, size=(1, n_lines))[0]
+    x = np.arange(n_samples) * spacing
+    expected = np.zeros(n_samples)
+    for k, power in lines:
         expected += np.sqrt(2 * power) * np.sin(2 * np.pi * k * dn * x - phases[k])
     assert profile.size == n_samples
     np.testing.assert_allclose(profile, expected, rtol=0, atol=1e-9 * np.abs(expected).max())
@@ -119,17 +120,11 @@ def test_gaussian_superposition_equals_rices_sum_of_random_cosines_and_sines():
     spacing, n_samples, gd_n0, w, n_min, n_max = 0.05, 400, 2e-4, 2.3, 0.2, 5.0
     profile = superposition_profile(n_samples, spacing, gd_n0=gd_n0, waviness=w, n_min=n_min, n_max=n_max,
                                     rng=np.random.default_rng(5), random_amplitudes=True)[0]  # fmt: skip
-    n_fft = scipy.fft.next_fast_len(max(n_samples, int(np.ceil(8.0 / (n_min * spacing)))), real=True)
-    dn = 1.0 / (n_fft * spacing)
-    n_lines = n_fft // 2 + 1
+    lines, dn, n_lines = _line_powers(spacing, n_samples, gd_n0, w, n_min, n_max)
     a, b = np.random.default_rng(5).standard_normal((2, 1, n_lines))[:, 0]
     x = np.arange(n_samples) * spacing
     expected = np.zeros(n_samples)
-    for k in range(1, n_lines):
-        lo, hi = max(k * dn - dn / 2, n_min), min(k * dn + dn / 2, n_max)
-        if hi <= lo or k >= n_fft / 2:
-            continue
-        power, _ = integrate.quad(lambda n: displacement_psd(n, gd_n0=gd_n0, waviness=w), lo, hi)
+    for k, power in lines:
         s = np.sqrt(power)  # the std of a_k and b_k: A_k / sqrt(2), A_k^2 / 2 = power
         expected += s * (a[k] * np.cos(2 * np.pi * k * dn * x) + b[k] * np.sin(2 * np.pi * k * dn * x))
     np.testing.assert_allclose(profile, expected, rtol=0, atol=1e-9 * np.abs(expected).max())
