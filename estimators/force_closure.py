@@ -107,17 +107,20 @@ class ClosureFit:
     windows: int
 
 
-def integrate(acc: npt.ArrayLike, dt: float, order: int, highpass_hz: float = 0.3) -> np.ndarray:
-    """The `order`-fold time integral of `acc` (1: velocity, 2: displacement), by the FFT over the
-    whole array, frequencies below `highpass_hz` (Hz) removed (circular: use the middle, or a
-    tapered window, of what it returns)."""
+def integrate(acc: npt.ArrayLike, dt: float, order: int | tuple[int, ...], highpass_hz: float = 0.3):
+    """The `order`-fold time integral of `acc` (1: velocity, 2: displacement; a tuple of orders gives
+    a tuple of integrals from one transform), by the FFT over the whole array, frequencies below
+    `highpass_hz` (Hz) removed (circular: use the middle, or a tapered window, of what it returns)."""
     x = np.asarray(acc, dtype=float)
     spectrum = np.fft.rfft(x - x.mean())
     omega = 2.0 * np.pi * np.fft.rfftfreq(x.size, dt)
     keep = omega > 2.0 * np.pi * highpass_hz
-    out = np.zeros_like(spectrum)
-    out[keep] = spectrum[keep] / (1j * omega[keep]) ** order
-    return np.fft.irfft(out, n=x.size)
+    out = []
+    for k in (order,) if isinstance(order, int) else order:
+        part = np.zeros_like(spectrum)
+        part[keep] = spectrum[keep] / (1j * omega[keep]) ** k
+        out.append(np.fft.irfft(part, n=x.size))
+    return out[0] if isinstance(order, int) else tuple(out)
 
 
 def corner_signals(
@@ -139,8 +142,7 @@ def corner_signals(
         raise InputError("corner_signals: the accelerations must be finite (cut the record at its gaps)")
     s0 = parts.static_travel
     law = parts.law
-    motion = integrate(acc_u - acc_s, dt, 2, highpass_hz)
-    rate = integrate(acc_u - acc_s, dt, 1, highpass_hz)
+    motion, rate = integrate(acc_u - acc_s, dt, (2, 1), highpass_hz)
     # the mean travel: the static one less the asymmetric damper's jacking down (and the progressive
     # spring's push up), for a Gaussian travel of the measured spreads (the monitor's linearization)
     mean = s0
