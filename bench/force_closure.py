@@ -1,6 +1,7 @@
 """The force closure (:mod:`suvtwin.estimators.force_closure`) on MuJoCo runs: each track's two tyres.
 
-Run: ``python bench/force_closure.py [--set constant] [--runs 30] [--at 10,30] [--window 4]`` — prints JSON.
+Run: ``python bench/force_closure.py [--set constant] [--runs 30] [--at 10,30] [--window 4] [--no-lag]``
+— prints JSON.
 
 The first `--runs` runs of a monitor bench set (:mod:`suvtwin.pipeline.monitor_scenarios`: Gaussian
 roads, levels anywhere in the class band, 0–300 kg; the runs cached in ``bench/_runs/<set>/``,
@@ -9,7 +10,8 @@ simulated there if missing), each read from 5 s on (the start's transient left o
 1 kPa steps, through eq. 3–4 of the run's tyre file), its minimum taken as the estimate; the corner
 parts from the SUV's parameter file with the run's loads (static travels and tyre loads), the
 accelerometers' noise the run records, the delay the wheelbase over the window's mean speed (the
-run's true speed). Printed per road class group (A–C, D): the error (estimate − truth, kPa) mean,
+run's true speed), the damper's timing per track the one of 0–1 ms (quarter steps) with the least J
+(``--no-lag``: 0). Printed per road class group (A–C, D): the error (estimate − truth, kPa) mean,
 std, median of its magnitude over the tyres with a usable window, how many tyres had one, and (a
 probe of a σ for it) the share of them within ±2σ of a posterior exp(−(J − J_min)/2s), s = J_min over
 its degrees of freedom.
@@ -37,7 +39,12 @@ START_S = 5.0
 OTHER = {"fl": "fr", "fr": "fl", "rl": "rr", "rr": "rl"}
 
 
-def run_errors(path: Path, at_s: list[float], window_s: float, jacking: bool = True) -> dict:
+LAGS_S = (0.0, 0.25e-3, 0.5e-3, 0.75e-3, 1.0e-3)
+"""The damper timings tried per track (s); the one with the least J is taken."""
+
+
+def run_errors(path: Path, at_s: list[float], window_s: float, jacking: bool = True,
+               lags_s: tuple[float, ...] = LAGS_S) -> dict:  # fmt: skip
     """Estimate − truth (kPa) of each tyre at each record length, NaN where no window was usable."""
     table = pq.read_table(path)
     meta = json.loads(table.schema.metadata[b"suvtwin.run"])
@@ -67,20 +74,26 @@ def run_errors(path: Path, at_s: list[float], window_s: float, jacking: bool = T
         keep = (t >= START_S) & (t < START_S + at)
         col = {name: frame[name].to_numpy()[keep] for name in frame.columns
                if "accel" in name and "true" not in name}  # fmt: skip
-        sig = {c: corner_signals(col[f"{c}_accel_unsprung_mps2"], col[f"{c}_accel_sprung_mps2"],
-                                 col[f"{OTHER[c]}_accel_unsprung_mps2"], col[f"{OTHER[c]}_accel_sprung_mps2"],
-                                 parts[c], dt=dt, jacking=jacking) for c in CORNERS}  # fmt: skip
         delay = vehicle.wheelbase / float(frame["speed_mps"].to_numpy()[keep].mean())
-        errors, used, z = {}, {}, {}
+        fits = {}
+        for lag in lags_s:
+            acc = {c: (col[f"{c}_accel_unsprung_mps2"], col[f"{c}_accel_sprung_mps2"]) for c in CORNERS}
+            sig = {c: corner_signals(*acc[c], *acc[OTHER[c]], parts[c], dt=dt, jacking=jacking,
+                                     damper_lag_s=lag) for c in CORNERS}  # fmt: skip
+            for f, r in (("fl", "rl"), ("fr", "rr")):
+                fit = closure_objective(sig[f], sig[r], delay_s=delay, dt=dt, stiffness_grid=grid,
+                                        tyre_damping=damping, noise_sigma=noise, window_s=window_s)
+                if f not in fits or (fit.windows_used and fit.objective.min() < fits[f][0].objective.min()):
+                    fits[f] = (fit, lag)
+        errors, used, z, lags = {}, {}, {}, {}
         for f, r in (("fl", "rl"), ("fr", "rr")):
-            fit = closure_objective(sig[f], sig[r], delay_s=delay, dt=dt, stiffness_grid=grid,
-                                    tyre_damping=damping, noise_sigma=noise, window_s=window_s)  # fmt: skip
+            fit, lags[f + r] = fits[f]
             for j, c in enumerate((f, r)):
                 truth = float(frame[f"{c}_pressure_kpa"].to_numpy()[keep][-1])
                 errors[c] = float(pressures[fit.best[j]] - truth) if fit.best else float("nan")
                 used[c] = [fit.windows_used, fit.windows]
                 z[c] = _z_score(fit, j, pressures, truth, window_s, dt) if fit.best else float("nan")
-        out[f"{at:g}s"] = {"error_kpa": errors, "windows": used, "z": z}
+        out[f"{at:g}s"] = {"error_kpa": errors, "windows": used, "z": z, "damper_lag_s": lags}
     return out
 
 
@@ -114,6 +127,8 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--runs", type=int, default=30, help="runs of the set (default 30)")
     parser.add_argument("--at", default="10,30", help="record lengths after the first 5 s, s (default 10,30)")
     parser.add_argument("--window", type=float, default=4.0, help="window length, s (default 4)")
+    parser.add_argument("--no-lag", action="store_true", help="the damper's timing taken as 0 (default: "
+                        "per track the least J of 0, 0.25, 0.5, 0.75, 1 ms)")
     parser.add_argument("--static-travel", action="store_true",
                         help="the travel's mean at the loads' static travel (default: less the jacking)")
     args = parser.parse_args(argv)
@@ -125,10 +140,12 @@ def main(argv: list[str] | None = None) -> dict:
     for run, path in zip(runs, paths, strict=True):
         if path is None:
             continue
-        per_run.append((run, run_errors(path, at_s, args.window, not args.static_travel)))
+        lags = (0.0,) if args.no_lag else LAGS_S
+        per_run.append((run, run_errors(path, at_s, args.window, not args.static_travel, lags)))
         print(f"force_closure: {run.name}", file=sys.stderr, flush=True)
     out: dict = {"bench": "force_closure", "set": args.set, "runs": len(per_run), "window_s": args.window,
-                 "travel_mean": "static" if args.static_travel else "jacking", "results": {}}  # fmt: skip
+                 "travel_mean": "static" if args.static_travel else "jacking",
+                 "damper_lags_s": [0.0] if args.no_lag else list(LAGS_S), "results": {}}  # fmt: skip
     for at in at_s:
         key = f"{at:g}s"
         groups: dict[str, list] = {"A-C": [], "D": []}

@@ -95,6 +95,23 @@ def test_a_wrong_delay_or_swapped_wheels_do_not_close(track):
     assert late.objective.min() > 50 * fit.objective.min()
 
 
+def test_the_dampers_timing_is_read_from_the_data(track):
+    # the simulated dampers act without a lag: the closure's J is least at no lag (about the noise's
+    # degrees of freedom), and grows with a lag of 1 ms, more with 2 ms
+    zeros = np.zeros(track["n"])
+    rng = np.random.default_rng(4)
+    acc = {key: [a + 0.05 * rng.standard_normal(a.size) for a in track[f"acc_{key[0]}"]]
+           for key in ("front", "rear")}  # fmt: skip
+    grid = np.linspace(150e3, 300e3, 151)
+    least = []
+    for lag in (0.0, 1e-3, 2e-3):
+        f, r = (corner_signals(acc[key][1], acc[key][0], zeros, zeros, _parts(**track[key]), dt=DT,
+                               damper_lag_s=lag) for key in ("front", "rear"))  # fmt: skip
+        least.append(closure_objective(f, r, delay_s=track["delay"], dt=DT, stiffness_grid=grid,
+                                       noise_sigma=0.05).objective.min())  # fmt: skip
+    assert least[0] < least[1] < least[2] and least[1] > 1.5 * least[0]
+
+
 def test_windows_at_a_stop_are_left_out(track):
     # a bump-stop clearance the travel passes now and then: those windows are not used
     body, wheel = track["acc_r"]
