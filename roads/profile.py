@@ -254,15 +254,15 @@ def superposition_profile(
     bin_power = np.zeros_like(lines)
     bin_power[inside] = _psd_integral(lower[inside], upper[inside], gd_n0=gd_n0, waviness=waviness)
     amplitude = np.sqrt(2.0 * bin_power)
+    # irfft(X)[j] = (2/N) Re sum_k X_k exp(i 2π k j / N)
     if random_amplitudes:
         # X_k = (N/2) (a_k - i b_k) gives a_k cos(2π n_k x_j) + b_k sin(2π n_k x_j), a, b ~ N(0, A_k²/2)
         a, b = rng.standard_normal((2, n_tracks, lines.size))
         spectrum = (n_fft / 2.0) * amplitude / np.sqrt(2.0) * (a - 1j * b)
-        return np.fft.irfft(spectrum, n=n_fft, axis=-1)[:, :n_samples]
-    phase = rng.uniform(0.0, 2.0 * np.pi, size=(n_tracks, lines.size))
-    # irfft(X)[j] = (2/N) Re sum_k X_k exp(i 2π k j / N); X_k = (N/2) A_k exp(-i(ψ_k + π/2))
-    # gives A_k sin(2π n_k x_j - ψ_k).
-    spectrum = (n_fft / 2.0) * amplitude * np.exp(-1j * (phase + np.pi / 2.0))
+    else:
+        # X_k = (N/2) A_k exp(-i(ψ_k + π/2)) gives A_k sin(2π n_k x_j - ψ_k)
+        phase = rng.uniform(0.0, 2.0 * np.pi, size=(n_tracks, lines.size))
+        spectrum = (n_fft / 2.0) * amplitude * np.exp(-1j * (phase + np.pi / 2.0))
     return np.fft.irfft(spectrum, n=n_fft, axis=-1)[:, :n_samples]
 
 
