@@ -182,6 +182,8 @@ def main(argv: list[str] | None = None) -> dict:
         help="the monitor's prior on the road's waviness (suvtwin.pipeline.monitoring.ROAD_WAVINESS)")
     add("--no-preview", dest="preview", action="store_false",
         help="each tyre on its own (default: each track's two tyres fused through its front→rear preview)")
+    add("--no-closure", dest="closure", action="store_false",
+        help="without the force closure (suvtwin.estimators.force_closure; default with it)")
     add("--dead-sensor", default=None, metavar="COLUMN",
         help="monitor with this column of each run file NaN throughout (e.g. rl_wheel_speed_radps)")
     add("--road-method", default=None, choices=("superposition", "shape-filter", "gaussian"),
@@ -234,7 +236,7 @@ def main(argv: list[str] | None = None) -> dict:
             run_monitor = monitor_run if args.dead_sensor is None else partial(monitor_without,
                                                                                 silent=args.dead_sensor)
             monitor = partial(run_monitor, corner_model=args.corner_model, preview=args.preview,
-                              road_waviness=args.road_waviness)  # fmt: skip
+                              road_waviness=args.road_waviness, force_closure=args.closure)  # fmt: skip
             t, e, cost = monitor_traces(part, paths, monitor=monitor, jobs=args.jobs,
                                         reset_at_s=args.reset_at)  # fmt: skip
             ok = [i for i, trace in enumerate(t) if trace is not None]  # the monitor raised on the others

@@ -8,7 +8,16 @@ import pytest
 import scipy.signal
 
 from suvtwin.errors import InputError
-from suvtwin.estimators.force_closure import CornerParts, closure_objective, corner_signals, integrate
+from suvtwin.estimators.force_closure import (
+    ClosureConfig,
+    ClosureStream,
+    CornerParts,
+    closure_objective,
+    closure_weights,
+    corner_signals,
+    integrate,
+    objective_from_moments,
+)
 from suvtwin.suspension_law import SuspensionLaw
 
 DT = 1e-3
@@ -143,3 +152,104 @@ def test_bad_inputs_name_the_problem():
         closure_objective(s, s, delay_s=0.0, dt=DT, stiffness_grid=[1e5, 2e5])
     with pytest.raises(InputError, match="stiffness_grid"):
         closure_objective(s, s, delay_s=0.1, dt=DT, stiffness_grid=[1e5])
+
+
+def test_the_moments_give_the_objective_of_the_windows_residuals(track):
+    # J from the summed moments against J summed window by window from each window's residual
+    rng = np.random.default_rng(5)
+    zeros = np.zeros(track["n"])
+    f, r = (corner_signals(w + 0.05 * rng.standard_normal(w.size), b, zeros, zeros, _parts(**track[key]),
+                           dt=DT)
+            for key, (b, w) in (("front", track["acc_f"]), ("rear", track["acc_r"])))  # fmt: skip
+    grid = np.array([180e3, 200e3, 235e3, 260e3])
+    fit = closure_objective(f, r, delay_s=track["delay"], dt=DT, stiffness_grid=grid, noise_sigma=0.05)
+    m = 4000
+    freq = np.fft.rfftfreq(m, DT)
+    band = (freq > 0.5) & (freq < 20.0)
+    omega = 2 * np.pi * freq[band]
+    shift = int(round(track["delay"] / DT))
+    phase = np.exp(-1j * omega * (track["delay"] - shift * DT))
+    x_f, x_r, inv_var = closure_weights(f.parts, r.parts, grid, grid, m=m, dt=DT, noise_sigma=0.05)
+    direct = np.zeros((grid.size, grid.size))
+    for start in range(shift, track["n"] - m + 1, m // 2):
+        rr, ff = slice(start, start + m), slice(start - shift, start - shift + m)
+        hann = np.hanning(m)
+        dft = [np.fft.rfft((x - x @ hann / hann.sum()) * hann)[band]
+               for x in (r.z_u[rr], r.force[rr], f.z_u[ff], f.force[ff])]  # fmt: skip
+        for i in range(grid.size):
+            for j in range(grid.size):
+                res = dft[0] + x_r[j] * dft[1] - phase * (dft[2] + x_f[i] * dft[3])
+                direct[i, j] += np.sum(np.abs(res) ** 2 * inv_var[i, j])
+    np.testing.assert_allclose(fit.objective, direct, rtol=1e-9)
+
+
+def test_decimated_integrals_are_the_full_rate_ones_in_band():
+    t = np.arange(12_345) * DT
+    acc = np.sin(2 * np.pi * 2.0 * t) + 0.3 * np.sin(2 * np.pi * 17.0 * t + 1.0)
+    full = integrate(acc, DT, (2, 1, 0), 0.3)
+    every5 = integrate(acc, DT, (2, 1, 0), 0.3, step=5)
+    for a, b in zip(full, every5, strict=True):
+        assert b.size == -(-acc.size // 5)
+        mid = slice(1000, -1000)
+        np.testing.assert_allclose(b[mid.start // 5 : mid.stop // 5], a[::5][mid.start // 5 : mid.stop // 5],
+                                   atol=2e-3 * np.abs(a).max())  # fmt: skip
+
+
+def _stream_feed(track, chunks, noise=0.05, seed=3, nan_at=None, speed=None):
+    """Two tracks of the lsim cars (the second the first's cars again) fed to a ClosureStream in
+    chunks of the given sizes (repeated); the summed moments per track and the stream."""
+    rng = np.random.default_rng(seed)
+    bf, wf = (a + noise * rng.standard_normal(a.size) for a in track["acc_f"])
+    br, wr = (a + noise * rng.standard_normal(a.size) for a in track["acc_r"])
+    a_s = np.column_stack([bf, bf, br, br])
+    a_u = np.column_stack([wf, wf, wr, wr])
+    if nan_at is not None:
+        a_u[nan_at, 0] = np.nan
+    parts = [_parts(**track[key]) for key in ("front", "front", "rear", "rear")]
+    wheelbase = 20.0 * track["delay"]
+    stream = ClosureStream(parts, ((0, 2), (1, 3)), wheelbase, DT)
+    v = np.full(track["n"], 20.0) if speed is None else speed
+    total, windows, skipped, i, k = 0.0, 0, 0, 0, 0
+    while i < track["n"]:
+        n = chunks[k % len(chunks)]
+        got = stream.add(v[i : i + n], a_s[i : i + n], a_u[i : i + n], np.ones(min(n, track["n"] - i), bool))
+        total = total + got.moments
+        windows, skipped = windows + got.windows, skipped + got.skipped
+        i, k = i + n, k + 1
+    return stream, total, windows, skipped
+
+
+def test_the_stream_closes_both_tyres_whatever_its_chunks(track):
+    grid = np.linspace(150e3, 300e3, 301)
+    stream, total, windows, skipped = _stream_feed(track, [4000])
+    _, total2, windows2, _ = _stream_feed(track, [777, 2500, 13])
+    # the same windows from the same buffers whatever the chunks: the same moments
+    np.testing.assert_array_equal(windows, windows2)
+    np.testing.assert_allclose(total2, total, rtol=1e-9, atol=1e-12 * np.abs(total).max())
+    # 24 s: windows every 2 s once the first has its margin and delay behind it
+    assert windows[0] >= 9 and skipped[0] == 0
+    w = stream.weights(0, 2, grid, grid, tyre_damping=200.0, noise_sigma=0.05)
+    j = objective_from_moments(total[0], weights=w)
+    best = np.unravel_index(np.argmin(j), j.shape)
+    assert grid[best[0]] == pytest.approx(235_000.0, rel=0.015)
+    assert grid[best[1]] == pytest.approx(198_000.0, rel=0.015)
+
+
+def test_the_stream_restarts_after_a_bad_sample_and_skips_a_changing_speed(track):
+    _, _, clean, _ = _stream_feed(track, [2000])
+    _, _, after_gap, _ = _stream_feed(track, [2000], nan_at=12_000)
+    # the windows holding the gap, and those whose margin or delay reach back over it, are lost
+    assert 0 < after_gap[0] < clean[0] - 1
+    speed = np.full(track["n"], 20.0)
+    speed[10_000:] = 25.0  # a step: the windows across it span 22 % of their mean speed
+    _, _, windows, skipped = _stream_feed(track, [2000], speed=speed)
+    assert skipped[0] >= 2 and windows[0] + skipped[0] <= clean[0] + 1
+
+
+def test_closure_config_names_the_bad_field():
+    with pytest.raises(InputError, match="margin_s"):
+        ClosureConfig(margin_s=-1.0)
+    with pytest.raises(InputError, match="analysis_rate_hz"):
+        ClosureConfig(analysis_rate_hz=30.0)
+    with pytest.raises(InputError, match="two tracks"):
+        ClosureStream([_parts(470.0, 61.0, 32_000.0, 2_500.0)] * 4, ((0, 2),), 2.8, DT)
