@@ -1,6 +1,7 @@
 """Cost of the online monitor over a long drive: is the cost per second of data the same after an hour?
 
-Run: ``python bench/monitor_cost.py [minutes] [run.parquet] [--no-preview] [--no-radius]`` — prints JSON.
+Run: ``python bench/monitor_cost.py [minutes] [run.parquet] [--no-preview] [--no-radius] [--no-closure]``
+— prints JSON.
 
 A MuJoCo run (default: a 60 s class C run at 90 km/h with four different pressures, simulated
 here) is streamed through one four-corner :class:`suvtwin.estimators.monitor.TyreMonitor` again
@@ -18,8 +19,9 @@ chunk to the old monitor, the same chunk to the fresh one). With both tracks' fr
 and the wheel speeds' radius analysis (:class:`suvtwin.estimators.rolling_radius.RollingRadius`,
 fed the same chunks and each sample's tyre loads from the accelerometers), as
 :func:`suvtwin.pipeline.monitoring.monitor_run` by default;
-``--no-preview``, ``--no-radius``: without (``radius_share`` is the radius analysis's part of the
-wall time).
+and each track's force closure (:mod:`suvtwin.estimators.force_closure`, with the preview's
+tracks); ``--no-preview``, ``--no-radius``, ``--no-closure``: without (``radius_share`` is the
+radius analysis's part of the wall time).
 """
 
 from __future__ import annotations
@@ -55,12 +57,13 @@ def _run_file() -> str:
 
 
 def main() -> None:
-    args = [a for a in sys.argv[1:] if a not in ("--no-preview", "--no-radius")]
+    args = [a for a in sys.argv[1:] if a not in ("--no-preview", "--no-radius", "--no-closure")]
     preview = "--no-preview" not in sys.argv[1:]
+    closure = "--no-closure" not in sys.argv[1:]
     radius = "--no-radius" not in sys.argv[1:]
     minutes = float(args[0]) if len(args) > 0 else 60.0
     path = args[1] if len(args) > 1 else _run_file()
-    from suvtwin.estimators.monitor import TyreMonitor
+    from suvtwin.estimators.monitor import MonitorConfig, TyreMonitor
     from suvtwin.estimators.rolling_radius import RollingRadius
     from suvtwin.mjcf.tire import load_tire
     from suvtwin.mjcf.vehicle import load_vehicle
@@ -83,7 +86,7 @@ def main() -> None:
     def fresh():
         """A monitor and radius analysis that have seen nothing."""
         return (TyreMonitor(corner_models(CORNERS), dt=dt, names=CORNERS, tracks=tracks,
-                            wheelbase_m=vehicle.wheelbase),
+                            wheelbase_m=vehicle.wheelbase, config=MonitorConfig(force_closure=closure)),
                 RollingRadius(wheel_positions(vehicle), dt, load_tire().unloaded_radius))  # fmt: skip
 
     def feed(pair, done: int, m: int, t_at: int | None = None) -> tuple[float, float]:
@@ -144,6 +147,7 @@ def main() -> None:
         "data_minutes": round(streamed * dt / 60.0, 2),
         "corners": len(CORNERS),
         "preview": preview,
+        "closure": closure,
         "radius": radius,
         "compile_s": round(compile_s, 2),
         "wall_per_data_s_first_minute_ms": round(1e3 * first, 3),

@@ -78,8 +78,8 @@ from suvtwin.errors import InputError
 from suvtwin.suspension_law import SuspensionLaw, damper_force, equivalent_spring_rate, spring_force
 
 __all__ = ["MOMENTS", "ClosureFit", "CornerParts", "CornerSignals", "band_of", "closure_objective",
-           "closure_weights", "corner_signals", "integrate", "objective_from_moments",
-           "window_moments", "ClosureBlock", "ClosureConfig", "ClosureStream"]  # fmt: skip
+           "closure_operator", "closure_weights", "corner_signals", "integrate", "objective_from_moments",
+           "real_moments", "window_moments", "ClosureBlock", "ClosureConfig", "ClosureStream"]  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -303,6 +303,29 @@ def closure_weights(
     return x_f, x_r, 1.0 / (noise_sigma**2 * np.sum(hann**2) * gains)
 
 
+def closure_operator(weights: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
+    """J as a linear map of the moments: the (G_f·G_r, 9·F) matrix that takes :func:`real_moments` to
+    J on the grid of `weights` (:func:`closure_weights`): what :func:`objective_from_moments` sums,
+    its coefficients made once, so each J is one matrix–vector product."""
+    x_f, x_r, inv_var = weights
+    xr, xf = x_r[None, :, :], x_f[:, None, :]
+    cross = xr * xf.conj()
+    w = inv_var
+    parts = [w, w * np.abs(xr) ** 2, w * np.abs(xf) ** 2, 2.0 * w * xr.real, -2.0 * w * xr.imag,
+             -2.0 * w * xf.real, 2.0 * w * xf.imag, -2.0 * w * cross.real, 2.0 * w * cross.imag]  # fmt: skip
+    g_f, g_r, n_f = inv_var.shape
+    return np.ascontiguousarray(np.stack([np.broadcast_to(q, inv_var.shape) for q in parts], axis=2)).reshape(
+        g_f * g_r, 9 * n_f)  # fmt: skip
+
+
+def real_moments(moments: np.ndarray) -> np.ndarray:
+    """The moments (:data:`MOMENTS`, F) as the real vector :func:`closure_operator` takes (9·F,):
+    |a|², |b|², |c|², then the real and imaginary parts of b ā, c ā, b c̄, each over F."""
+    saa, sbb, scc, sba, sca, sbc = moments
+    return np.concatenate([saa.real, sbb.real, scc.real, sba.real, sba.imag, sca.real, sca.imag, sbc.real,
+                           sbc.imag])  # fmt: skip
+
+
 def objective_from_moments(
     moments: np.ndarray, front: CornerParts | None = None, rear: CornerParts | None = None,
     k_front: np.ndarray | None = None, k_rear: np.ndarray | None = None, *, m: int = 0, dt: float = 0.0,
@@ -346,6 +369,7 @@ class ClosureConfig:
     min_speed_mps: float = 5.0
     max_speed_change: float = 0.1
     analysis_rate_hz: float = 200.0
+    span_windows: int = 2
 
     def __post_init__(self) -> None:
         checks = [
@@ -357,6 +381,7 @@ class ClosureConfig:
             ("damper_lag_s", 0.0 <= self.damper_lag_s <= 0.01, "0–0.01 s"),
             ("min_speed_mps", 0.5 <= self.min_speed_mps <= 50.0, "0.5–50 m/s"),
             ("max_speed_change", 0.0 < self.max_speed_change <= 1.0, "0–1"),
+            ("span_windows", isinstance(self.span_windows, int) and 1 <= self.span_windows <= 16, "1–16"),
             ("analysis_rate_hz", self.analysis_rate_hz >= 2.0 * self.band_hz[1],
              "at least twice band_hz's top"),
         ]
@@ -446,16 +471,18 @@ class ClosureStream:
         else:
             self._v = np.concatenate([self._v, v])
             self._a_s, self._a_u = np.concatenate([self._a_s, a_s]), np.concatenate([self._a_u, a_u])
+        cfg = self.config
         half = self.m // 2
         if self._next is None:  # the first start on the half-window lattice with room for the delay
             earliest = self._first + self.margin + self.max_shift
             self._next = -(-earliest // half) * half
-        starts = []
-        while self._next + self.m + self.margin <= end:
-            starts.append(self._next)
-            self._next += half
-        if starts:
-            self._analyse(starts, moments, windows, skipped)
+        group = cfg.span_windows * half  # the windows of a group share one span
+        while True:
+            last = (self._next // group) * group + group - half  # the group's last start
+            if last + self.m + self.margin > end:
+                break
+            self._analyse(list(range(self._next, last + 1, half)), moments, windows, skipped)
+            self._next = last + half
         # keep what the next window needs: its delayed front and the margin before it
         drop = max(0, min(self._next - self.max_shift - self.margin, end) - self._first)
         self._v, self._a_s, self._a_u = self._v[drop:], self._a_s[drop:], self._a_u[drop:]
@@ -463,34 +490,35 @@ class ClosureStream:
         return ClosureBlock(moments, windows, skipped)
 
     def _analyse(self, starts, moments, windows, skipped) -> None:
-        """Each window's moments from its own span (its delayed front and the margins), so what a
-        window gives does not depend on how the stream was cut into blocks."""
+        """The moments of the windows starting at `starts` (a group on the fixed lattice) from one
+        span: their delayed fronts and the margins, so what a window gives does not depend on how
+        the stream was cut into blocks."""
         cfg = self.config
         corners = sorted({c for pair in self.tracks for c in pair})
         row = {c: i for i, c in enumerate(corners)}
         q, dt = self.q, self.q * self.dt
+        lo = starts[0] - self.max_shift - self.margin - self._first
+        hi = starts[-1] + self.m + self.margin - self._first
+        a_s, a_u = self._a_s[lo:hi], self._a_u[lo:hi]
+        # the margins tapered (Tukey) to zero: the integrals' error from the span's ends becomes a slow
+        # drift in the windows instead of the circular FFT's jump
+        taper = scipy.signal.windows.tukey(hi - lo, 2.0 * self.margin / (hi - lo))[:, None]
+        a_s, a_u = (a_s - a_s.mean(axis=0)) * taper, (a_u - a_u.mean(axis=0)) * taper
+        motion, rate = integrate((a_u - a_s)[:, corners].T, self.dt, (2, 1), cfg.highpass_hz,
+                                 cfg.damper_lag_s, step=q)  # fmt: skip
+        z_u, wheel = integrate(a_u[:, corners].T, self.dt, (2, 0), cfg.highpass_hz, step=q)
+        signals = {c: _corner_signal(wheel[row[c]], z_u[row[c]], motion[row[c]], rate[row[c]],
+                                     motion[row[self.partner[c]]], self.parts[c], cfg.min_load_share)
+                   for c in corners}  # fmt: skip
         for start in starts:
-            lo = start - self.max_shift - self.margin - self._first
-            hi = start + self.m + self.margin - self._first
-            speed = self._v[lo + self.margin : hi - self.margin]
+            at = start - self._first - lo  # the rear window's first sample in the span
+            speed = self._v[lo + at - self.max_shift : lo + at + self.m]
             mean = float(speed.mean())
             if mean < cfg.min_speed_mps or np.ptp(speed) > cfg.max_speed_change * mean:
                 skipped += 1
                 continue
-            a_s, a_u = self._a_s[lo:hi], self._a_u[lo:hi]
-            # the margins tapered (Tukey) to zero: the integrals' error from the span's ends becomes
-            # a slow drift in the window instead of the circular FFT's jump
-            taper = scipy.signal.windows.tukey(hi - lo, 2.0 * self.margin / (hi - lo))[:, None]
-            a_s, a_u = (a_s - a_s.mean(axis=0)) * taper, (a_u - a_u.mean(axis=0)) * taper
-            motion, rate = integrate((a_u - a_s)[:, corners].T, self.dt, (2, 1), cfg.highpass_hz,
-                                     cfg.damper_lag_s, step=q)  # fmt: skip
-            z_u, wheel = integrate(a_u[:, corners].T, self.dt, (2, 0), cfg.highpass_hz, step=q)
-            signals = {c: _corner_signal(wheel[row[c]], z_u[row[c]], motion[row[c]], rate[row[c]],
-                                         motion[row[self.partner[c]]], self.parts[c], cfg.min_load_share)
-                       for c in corners}  # fmt: skip
-            at = (self.max_shift + self.margin) // q
             for i, (f, r) in enumerate(self.tracks):
-                part, used = window_moments(signals[f], signals[r], [at], self.m // q, dt=dt,
+                part, used = window_moments(signals[f], signals[r], [at // q], self.m // q, dt=dt,
                                             delay_s=self.wheelbase / mean, band_hz=cfg.band_hz)  # fmt: skip
                 moments[i] += part
                 windows[i] += used
