@@ -105,3 +105,17 @@ def test_the_closure_is_off_without_two_tracks_or_suspension_laws(drive):
     monitor = TyreMonitor(plain, dt=DT, tracks=((0, 2), (1, 3)), wheelbase_m=WHEELBASE)
     monitor.update(t[:10_000], np.full(10_000, SPEED), a_s[:10_000], a_u[:10_000])
     assert monitor.counts["closure_windows"].sum() == 0
+
+
+def test_a_disconnected_wheel_accelerometer_keeps_the_closure_out(drive):
+    # the rear-right wheel's accelerometer reads its noise alone (unplugged): the monitor flags the
+    # corner silent, and the closure, whose wheel forces need every corner, takes no window at all
+    t, a_s, a_u = drive
+    unplugged = a_u.copy()
+    unplugged[:, 3] = 0.3 * np.random.default_rng(9).standard_normal(t.size)
+    monitor, out = _run((t, a_s, unplugged))
+    assert monitor.counts["silent"][3] > 0
+    assert monitor.counts["closure_windows"].sum() == 0
+    # the other track keeps the estimate its spectra give, within 3σ
+    error = out.pressure_pa[-1, [0, 2]] / 1e3 - np.array(PRESSURES_KPA)[[0, 2]]
+    assert np.all(np.abs(error) <= 3.0 * out.pressure_sigma_pa[-1, [0, 2]] / 1e3), error
