@@ -57,7 +57,7 @@ holds ``margin_s`` beyond it, from its own span (the window, its front's delay a
 side, tapered), so a window's moments do not depend on how the stream was cut; at 200 Hz (the
 spectrum cut there first). On the first 30 ``constant`` runs fed from the start in 2 s blocks, the
 damper's timing half the simulator's step: −0.9 ± 7.1 kPa at 10 s, +0.1 ± 3.0 at 20 s, +0.5 ± 2.2 at
-30 s (80 of 120 tyres: classes A–C); cost about 0.8 ms per second of four-corner data. The online
+30 s (80 of 120 tyres: classes A–C); cost about 1 ms per second of four-corner data. The online
 monitor (:mod:`suvtwin.estimators.monitor`) takes each update's windows as a likelihood of the two
 tyres' pressures and adds a model-error floor to its σ.
 

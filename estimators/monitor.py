@@ -1273,6 +1273,11 @@ class TyreMonitor:
         self._state.fit = self._moments()
 
     @property
+    def closure_config(self) -> ClosureConfig | None:
+        """The force closure's settings where it runs (:meth:`_correct_closure`), else None."""
+        return None if self._closure is None else self._closure.config
+
+    @property
     def state_nbytes(self) -> int:
         """Size of the state the monitor carries between updates, bytes (bounded: the posterior grid,
         the last window's samples and the previews' statistics)."""

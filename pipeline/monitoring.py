@@ -502,6 +502,12 @@ def monitor_run(
         "segments": counts["segments"],
         "segment_status": {r: dict(zip(corners, counts[r].tolist(), strict=True)) for r in SKIP_REASONS},
         "changes": dict(zip(corners, counts["changes"].tolist(), strict=True)),
+        # the force closure: its settings and, per tyre, its track's windows used and passed over
+        "force_closure": None if monitor.closure_config is None else {
+            "config": asdict(monitor.closure_config),
+            "windows": dict(zip(corners, counts["closure_windows"].tolist(), strict=True)),
+            "skipped": dict(zip(corners, counts["closure_skipped"].tolist(), strict=True)),
+        },
         "radius": None if evidence is None else {
             "config": asdict(analysis.config),
             "calibration": "tyre model at the placard" if placard_kpa is not None else "learned at the reset",

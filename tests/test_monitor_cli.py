@@ -43,6 +43,10 @@ def test_monitor_writes_every_tyre_and_warns_against_a_placard(run_file, tmp_pat
         assert (frame[f"{c}_fused_sigma_kpa"] < frame[f"{c}_pressure_sigma_kpa"]).all()
     meta = json.loads(table.schema.metadata[b"suvtwin.monitor"])
     assert meta["placard_kpa"] == 250.0 and meta["segments"] == 5
+    # the force closure ran: the simulator's half step told it as the damper's timing, windows counted
+    closure = meta["force_closure"]
+    assert closure["config"]["damper_lag_s"] == pytest.approx(0.5e-3)
+    assert min(closure["windows"].values()) > 0
     warned = [meta["warnings"][c] for c in ("fl", "fr", "rl", "rr")]
     assert all(w is not None and w["loss_probability"] >= 0.95 for w in warned)
     assert "WARNING" in capsys.readouterr().out
