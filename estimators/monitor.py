@@ -1872,10 +1872,15 @@ class TyreMonitor:
             width = math.sqrt(floor[c])
             offsets = np.arange(-math.ceil(6.0 * width), math.ceil(6.0 * width) + 1, dtype=float)
             kernel = np.exp(-0.5 * (offsets / width) ** 2)
-            spread = np.convolve(marg[c], kernel / kernel.sum(), mode="same")
-            cdf = np.concatenate([[0.0], np.cumsum(spread)])
-            out[c] = np.interp(TAIL_LEVELS, cdf / cdf[-1], self._p_edges)
+            out[c] = self._tails(np.convolve(marg[c], kernel / kernel.sum(), mode="same")[None])[0]
         return out
+
+    def _tails(self, marg: np.ndarray) -> np.ndarray:
+        """The :data:`TAIL_LEVELS` quantiles (U, 2), kPa, of pressure distributions `marg` (U, P) on the
+        1 kPa grid: each grid value's mass spread over its cell, the CDF linear within it."""
+        cdf = np.concatenate([np.zeros((marg.shape[0], 1)), np.cumsum(marg, axis=1)], axis=1)
+        cdf /= cdf[:, -1:]
+        return np.array([np.interp(TAIL_LEVELS, row, self._p_edges) for row in cdf])
 
     def _moments(self) -> _Fit:
         """The posterior's moments per corner: pressure (kPa) and waviness mean and variance, the
@@ -1884,11 +1889,7 @@ class TyreMonitor:
         p_marg = post.sum(axis=(1, 2, 3))  # (C, P)
         p_mean = p_marg @ self._p_grid
         p_var = np.maximum(p_marg @ self._p_grid**2 - p_mean**2, 0.0)
-        # quantiles: each grid value's mass spread over its 1 kPa cell, the CDF linear within it
-        edges = self._p_edges
-        cdf = np.concatenate([np.zeros((p_marg.shape[0], 1)), np.cumsum(p_marg, axis=1)], axis=1)
-        cdf /= cdf[:, -1:]
-        p_tails = np.array([np.interp(TAIL_LEVELS, row, edges) for row in cdf])
+        p_tails = self._tails(p_marg)
         db = post.sum(axis=(1, 4))  # (C, D, B)
         w_marg = db.sum(axis=1)  # (C, B)
         w_mean = w_marg @ self.waviness_grid
