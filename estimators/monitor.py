@@ -1065,7 +1065,7 @@ class TyreMonitor:
             for f, r in self.tracks
         ]  # fmt: skip
         self._laws = np.array([[t.kt0, t.p0, t.pfz1] for t in self.tires]).T  # (3, C): eq. 3–4 per corner
-        self._closure, self._closure_weights = self._new_closure(wheelbase_m, closure_config)
+        self._closure, self._closure_operators = self._new_closure(wheelbase_m, closure_config)
         # the prior of (damping, slope): uniform × spike and slab, normalized (D, B)
         prior_db = np.exp(self._w_logprior)[None, :] * np.ones((n_d, 1))
         self._prior_db = prior_db / prior_db.sum()
@@ -1829,7 +1829,7 @@ class TyreMonitor:
             if found.windows[i] == 0:
                 continue
             # J on the two tyres' coarse grids (f, r): the moments through the track's operator
-            j = (self._closure_weights[i] @ real_moments(found.moments[i])).reshape(self._p_coarse.size, -1)
+            j = (self._closure_operators[i] @ real_moments(found.moments[i])).reshape(self._p_coarse.size, -1)
             j_min = float(j.min())
             dof = 2.0 * found.moments.shape[-1] * found.windows[i] / 1.5
             ll = -(j - j_min) / (2.0 * max(j_min / dof, 1e-12))
