@@ -66,6 +66,7 @@ No MuJoCo here: the functions consume arrays.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -79,7 +80,8 @@ from suvtwin.suspension_law import SuspensionLaw, damper_force, equivalent_sprin
 
 __all__ = ["MOMENTS", "ClosureFit", "CornerParts", "CornerSignals", "band_of", "closure_objective",
            "closure_operator", "closure_weights", "corner_signals", "integrate", "objective_from_moments",
-           "real_moments", "window_moments", "ClosureBlock", "ClosureConfig", "ClosureStream"]  # fmt: skip
+           "real_moments", "window_moments", "windows_moments", "ClosureBlock", "ClosureConfig",
+           "ClosureStream"]  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -96,6 +98,11 @@ class CornerParts:
     anti_roll: float
     static_travel: float
     static_load: float
+
+    @functools.cached_property
+    def static_spring_force(self) -> float:
+        """The spring's force at the static travel beyond its preload, N (:func:`spring_force`)."""
+        return float(spring_force(np.array([self.static_travel]), self.law)[0])
 
 
 @dataclass(frozen=True)
@@ -185,7 +192,7 @@ def _corner_signal(acc_u, z_u, motion, rate, motion_other, parts: CornerParts, m
     if jacking:
         mean = float(equivalent_spring_rate(law, s0, float(motion.std()), float(rate.std()))[0])
     travel = motion + mean
-    spring = spring_force(travel, law) - float(spring_force(np.array([s0]), law)[0])
+    spring = spring_force(travel, law) - parts.static_spring_force
     bar = parts.anti_roll * (motion - motion_other)
     force = parts.unsprung_mass * acc_u + spring + damper_force(rate, law) + bar
     usable = ((parts.static_load + force > min_load_share * parts.static_load)
@@ -263,29 +270,50 @@ def window_moments(
     if not (np.isfinite(delay_s) and delay_s > 0):
         raise InputError(f"closure_objective: delay_s must be > 0 s, got {delay_s!r}")
     shift = int(round(delay_s / dt))
+    rear_at = np.array([s for s in starts if s - shift >= 0 and s + m <= rear.z_u.size], dtype=np.int64)
+    fraction = np.full(rear_at.size, delay_s - shift * dt)
+    out, used = windows_moments([front], [rear], rear_at, rear_at - shift, fraction, m, dt=dt,
+                                band_hz=band_hz)
+    return out[0], int(used[0])
+
+
+def windows_moments(
+    fronts, rears, rear_at: np.ndarray, front_at: np.ndarray, fraction_s: np.ndarray, m: int, *, dt: float,
+    band_hz: tuple[float, float] = (0.5, 20.0),
+) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """:func:`window_moments` of several tracks' windows at once, each window its own delay: per track
+    (`fronts`, `rears`: (T,) :class:`CornerSignals` on one time axis) the moments (T, :data:`MOMENTS`,
+    F) summed over the usable `m`-sample Hann windows whose rear starts at `rear_at` (W,) and front at
+    `front_at` (W,) (sample indices: the delay's whole samples), the delay's remaining `fraction_s`
+    (W,) s a phase; and how many were usable per track (T,)."""
     freq = np.fft.rfftfreq(m, dt)
     band = (freq > band_hz[0]) & (freq < band_hz[1])
-    phase = np.exp(-1j * 2.0 * np.pi * freq[band] * (delay_s - shift * dt))
+    out = np.zeros((len(rears), MOMENTS, int(band.sum())), dtype=complex)
+    used = np.zeros(len(rears), dtype=int)
+    if rear_at.size == 0:
+        return out, used
+    span = np.arange(m)
+    r_idx, f_idx = rear_at[:, None] + span, front_at[:, None] + span  # (W, m)
+    ok = np.stack([rear.usable[r_idx].all(axis=1) & front.usable[f_idx].all(axis=1)
+                   for front, rear in zip(fronts, rears, strict=True)])  # (T, W)  # fmt: skip
+    if not ok.any():
+        return out, used
     hann = np.hanning(m)
-    picked = []
-    for start in starts:
-        r, f = slice(start, start + m), slice(start - shift, start - shift + m)
-        if start - shift < 0 or start + m > rear.z_u.size:
-            continue
-        if rear.usable[r].all() and front.usable[f].all():
-            picked.append((r, f))
-    out = np.zeros((MOMENTS, int(band.sum())), dtype=complex)
-    if not picked:
-        return out, 0
-    stack = np.stack([np.stack([rear.z_u[r], rear.force[r], front.z_u[f], front.force[f]])
-                      for r, f in picked])  # fmt: skip
-    # each signal's mean under the window removed (its leakage into the band)
-    dft = np.fft.rfft((stack - (stack @ hann)[..., None] / hann.sum()) * hann, axis=-1)[..., band]  # W, 4, F
-    a = dft[:, 0] - dft[:, 2] * phase
-    b, c = dft[:, 1], dft[:, 3] * phase
-    out[0], out[1], out[2] = np.sum(np.abs(a) ** 2, 0), np.sum(np.abs(b) ** 2, 0), np.sum(np.abs(c) ** 2, 0)
-    out[3], out[4], out[5] = np.sum(b * a.conj(), 0), np.sum(c * a.conj(), 0), np.sum(b * c.conj(), 0)
-    return out, len(picked)
+    # (T, W, 4, m): per track and window the rear's height and force, the front's delayed ones
+    stack = np.stack([np.stack([rear.z_u[r_idx], rear.force[r_idx], front.z_u[f_idx], front.force[f_idx]],
+                               axis=1) for front, rear in zip(fronts, rears, strict=True)])  # fmt: skip
+    # each signal's mean under the window removed (its leakage into the band); (T, W, 4, F)
+    dft = np.fft.rfft((stack - (stack @ hann)[..., None] / hann.sum()) * hann, axis=-1)[..., band]
+    phase = np.exp(-1j * 2.0 * np.pi * np.outer(fraction_s, freq[band]))  # (W, F)
+    a = dft[:, :, 0] - dft[:, :, 2] * phase
+    b, c = dft[:, :, 1], dft[:, :, 3] * phase
+    w = ok[..., None].astype(float)  # the unusable windows weigh nothing
+    out[:, 0] = np.sum(w * np.abs(a) ** 2, 1)
+    out[:, 1] = np.sum(w * np.abs(b) ** 2, 1)
+    out[:, 2] = np.sum(w * np.abs(c) ** 2, 1)
+    out[:, 3], out[:, 4], out[:, 5] = (np.sum(w * b * a.conj(), 1), np.sum(w * c * a.conj(), 1),
+                                       np.sum(w * b * c.conj(), 1))  # fmt: skip
+    return out, ok.sum(axis=1)
 
 
 def closure_weights(
@@ -432,6 +460,7 @@ class ClosureStream:
         self.margin = q * int(math.ceil(cfg.margin_s / (q * dt)))
         self.max_shift = q * int(math.ceil(self.wheelbase / cfg.min_speed_mps / (q * dt)) + 1)
         self.n_bins = band_of(self.m // q, q * dt, cfg.band_hz).size
+        self._tapers: dict[int, np.ndarray] = {}
         self.reset()
 
     def weights(self, front: int, rear: int, k_front, k_rear, *, tyre_damping: float, noise_sigma: float):
@@ -442,6 +471,13 @@ class ClosureStream:
                                np.asarray(k_rear, dtype=float), m=self.m // self.q, dt=self.q * self.dt,
                                band_hz=self.config.band_hz, tyre_damping=tyre_damping,
                                noise_sigma=noise_sigma / math.sqrt(self.q))  # fmt: skip
+
+    def _taper(self, n: int) -> np.ndarray:
+        """The `n`-sample span's Tukey taper (n, 1): the margins each side from zero up to one (made once
+        per span length: a stream's spans have one length)."""
+        if n not in self._tapers:
+            self._tapers[n] = scipy.signal.windows.tukey(n, 2.0 * self.margin / n)[:, None]
+        return self._tapers[n]
 
     def reset(self) -> None:
         """Forget the buffer (the next window starts once enough valid samples are in)."""
@@ -502,7 +538,7 @@ class ClosureStream:
         a_s, a_u = self._a_s[lo:hi], self._a_u[lo:hi]
         # the margins tapered (Tukey) to zero: the integrals' error from the span's ends becomes a slow
         # drift in the windows instead of the circular FFT's jump
-        taper = scipy.signal.windows.tukey(hi - lo, 2.0 * self.margin / (hi - lo))[:, None]
+        taper = self._taper(hi - lo)
         a_s, a_u = (a_s - a_s.mean(axis=0)) * taper, (a_u - a_u.mean(axis=0)) * taper
         motion, rate = integrate((a_u - a_s)[:, corners].T, self.dt, (2, 1), cfg.highpass_hz,
                                  cfg.damper_lag_s, step=q)  # fmt: skip
@@ -510,6 +546,7 @@ class ClosureStream:
         signals = {c: _corner_signal(wheel[row[c]], z_u[row[c]], motion[row[c]], rate[row[c]],
                                      motion[row[self.partner[c]]], self.parts[c], cfg.min_load_share)
                    for c in corners}  # fmt: skip
+        kept, delays = [], []
         for start in starts:
             at = start - self._first - lo  # the rear window's first sample in the span
             speed = self._v[lo + at - self.max_shift : lo + at + self.m]
@@ -517,9 +554,15 @@ class ClosureStream:
             if mean < cfg.min_speed_mps or np.ptp(speed) > cfg.max_speed_change * mean:
                 skipped += 1
                 continue
-            for i, (f, r) in enumerate(self.tracks):
-                part, used = window_moments(signals[f], signals[r], [at // q], self.m // q, dt=dt,
-                                            delay_s=self.wheelbase / mean, band_hz=cfg.band_hz)  # fmt: skip
-                moments[i] += part
-                windows[i] += used
-                skipped[i] += 1 - used
+            kept.append(at // q)
+            delays.append(self.wheelbase / mean)
+        if not kept:
+            return
+        rear_at, delay = np.array(kept, dtype=np.int64), np.array(delays)
+        shift = np.rint(delay / dt).astype(np.int64)
+        fronts, rears = [signals[f] for f, _ in self.tracks], [signals[r] for _, r in self.tracks]
+        part, used = windows_moments(fronts, rears, rear_at, rear_at - shift, delay - shift * dt, self.m // q,
+                                     dt=dt, band_hz=cfg.band_hz)  # fmt: skip
+        moments += part
+        windows += used
+        skipped += len(kept) - used

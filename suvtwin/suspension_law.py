@@ -135,10 +135,12 @@ class SuspensionLaw:
             if not getattr(self, name) > 0.0:
                 raise InputError(f"suspension {name} must be > 0, got {getattr(self, name)!r}")
 
-    @property
+    @functools.cached_property
     def values(self) -> np.ndarray:
-        """The 13 values in field order, for the compiled functions."""
-        return np.array([getattr(self, f.name) for f in fields(self)], dtype=float)
+        """The 13 values in field order, for the compiled functions (made once; read-only)."""
+        out = np.array([getattr(self, f.name) for f in fields(self)], dtype=float)
+        out.setflags(write=False)
+        return out
 
     @classmethod
     def of(cls, suspension, *, spring_rate: float) -> SuspensionLaw:
