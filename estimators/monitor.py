@@ -185,8 +185,7 @@ from suvtwin.estimators.force_closure import (
     ClosureConfig,
     ClosureStream,
     CornerParts,
-    closure_operator,
-    real_moments,
+    objective_on_grid,
 )
 from suvtwin.estimators.full_car import (
     axle_coherence_parts,
@@ -1065,7 +1064,7 @@ class TyreMonitor:
             for f, r in self.tracks
         ]  # fmt: skip
         self._laws = np.array([[t.kt0, t.p0, t.pfz1] for t in self.tires]).T  # (3, C): eq. 3–4 per corner
-        self._closure, self._closure_operators = self._new_closure(wheelbase_m, closure_config)
+        self._closure, self._closure_weights = self._new_closure(wheelbase_m, closure_config)
         # the prior of (damping, slope): uniform × spike and slab, normalized (D, B)
         prior_db = np.exp(self._w_logprior)[None, :] * np.ones((n_d, 1))
         self._prior_db = prior_db / prior_db.sum()
@@ -1769,8 +1768,8 @@ class TyreMonitor:
         _bayes(s.post, rows.astype(np.int64), fine)
 
     def _new_closure(self, wheelbase_m: float | None, config: ClosureConfig | None):
-        """The force closure's stream and each track's J operator on the coarse pressure grid
-        (:func:`~suvtwin.estimators.force_closure.closure_operator`), or (None, []) where it cannot
+        """The force closure's stream and each track's weights of J on the coarse pressure grid
+        (:func:`~suvtwin.estimators.force_closure.closure_weights`), or (None, []) where it cannot
         run: off in the config, not two tracks, or a corner without its suspension law."""
         cfg = self.config
         if not (cfg.force_closure and len(self.tracks) == 2 and wheelbase_m is not None
@@ -1782,12 +1781,12 @@ class TyreMonitor:
             for c, qc in enumerate(self.models)
         ]  # fmt: skip
         stream = ClosureStream(parts, self.tracks, float(wheelbase_m), self.dt, config)
-        operators = [closure_operator(stream.weights(f, r, self._kt_coarse[f], self._kt_coarse[r],
-                                                     tyre_damping=0.5 * (self.models[f].tire_damping
-                                                                         + self.models[r].tire_damping),
-                                                     noise_sigma=cfg.sigma_accel))
-                     for f, r in self.tracks]  # fmt: skip
-        return stream, operators
+        weights = [stream.weights(f, r, self._kt_coarse[f], self._kt_coarse[r],
+                                  tyre_damping=0.5 * (self.models[f].tire_damping
+                                                      + self.models[r].tire_damping),
+                                  noise_sigma=cfg.sigma_accel)
+                   for f, r in self.tracks]  # fmt: skip
+        return stream, weights
 
     def _correct_closure(self, block, checks: np.ndarray, status: np.ndarray, elapsed: float) -> None:
         r"""Bayes' rule with the force closure's new windows (:class:`~.force_closure.ClosureStream`,
@@ -1828,8 +1827,8 @@ class TyreMonitor:
             counts["closure_skipped"][[f, r]] += found.skipped[i]
             if found.windows[i] == 0:
                 continue
-            # J on the two tyres' coarse grids (f, r): the moments through the track's operator
-            j = (self._closure_operators[i] @ real_moments(found.moments[i])).reshape(self._p_coarse.size, -1)
+            # J on the two tyres' coarse grids (f, r) from the windows' moments
+            j = objective_on_grid(found.moments[i], self._closure_weights[i])
             j_min = float(j.min())
             dof = 2.0 * found.moments.shape[-1] * found.windows[i] / 1.5
             ll = -(j - j_min) / (2.0 * max(j_min / dof, 1e-12))
