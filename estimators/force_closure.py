@@ -451,6 +451,7 @@ class ClosureStream:
         self.margin = q * int(math.ceil(cfg.margin_s / (q * dt)))
         self.max_shift = q * int(math.ceil(self.wheelbase / cfg.min_speed_mps / (q * dt)) + 1)
         self.n_bins = band_of(self.m // q, q * dt, cfg.band_hz).size
+        self._tapers: dict[int, np.ndarray] = {}  # the spans' tapers by length (_analyse)
         self.reset()
 
     def weights(self, front: int, rear: int, k_front, k_rear, *, tyre_damping: float, noise_sigma: float):
@@ -518,14 +519,15 @@ class ClosureStream:
         q, dt = self.q, self.q * self.dt
         lo = starts[0] - self.max_shift - self.margin - self._first
         hi = starts[-1] + self.m + self.margin - self._first
-        a_s, a_u = self._a_s[lo:hi], self._a_u[lo:hi]
         # the margins tapered (Tukey) to zero: the integrals' error from the span's ends becomes a slow
-        # drift in the windows instead of the circular FFT's jump
-        taper = scipy.signal.windows.tukey(hi - lo, 2.0 * self.margin / (hi - lo))[:, None]
-        a_s, a_u = (a_s - a_s.mean(axis=0)) * taper, (a_u - a_u.mean(axis=0)) * taper
-        motion, rate = integrate((a_u - a_s)[:, corners].T, self.dt, (2, 1), cfg.highpass_hz,
-                                 cfg.damper_lag_s, step=q)  # fmt: skip
-        z_u, wheel = integrate(a_u[:, corners].T, self.dt, (2, 0), cfg.highpass_hz, step=q)
+        # drift in the windows instead of the circular FFT's jump (the taper depends on the span's
+        # length only: made once per length)
+        taper = self._tapers.get(hi - lo)
+        if taper is None:
+            taper = self._tapers[hi - lo] = scipy.signal.windows.tukey(hi - lo, 2.0 * self.margin / (hi - lo))
+        relative, wheel_acc = _tapered_span(self._a_s, self._a_u, lo, hi, taper, np.array(corners))
+        motion, rate = integrate(relative, self.dt, (2, 1), cfg.highpass_hz, cfg.damper_lag_s, step=q)
+        z_u, wheel = integrate(wheel_acc, self.dt, (2, 0), cfg.highpass_hz, step=q)
         signals = {c: _corner_signal(wheel[row[c]], z_u[row[c]], motion[row[c]], rate[row[c]],
                                      motion[row[self.partner[c]]], self.parts[c], cfg.min_load_share)
                    for c in corners}  # fmt: skip
@@ -542,3 +544,25 @@ class ClosureStream:
                 moments[i] += part
                 windows[i] += used
                 skipped[i] += 1 - used
+
+
+@cached_njit
+def _tapered_span(a_s, a_u, lo, hi, taper, corners):
+    """Each of `corners`' body and wheel accelerations `a_s`, `a_u` (n, C) over the rows `lo`…`hi`, less
+    their means there, times `taper` (hi − lo,): the wheel's minus the body's and the wheel's, two
+    (K, hi − lo) arrays (m/s²), in one pass (:meth:`ClosureStream._analyse`)."""
+    n = hi - lo
+    relative, wheel = np.empty((corners.size, n)), np.empty((corners.size, n))
+    for i in range(corners.size):
+        c = corners[i]
+        mean_s = mean_u = 0.0
+        for j in range(lo, hi):
+            mean_s += a_s[j, c]
+            mean_u += a_u[j, c]
+        mean_s /= n
+        mean_u /= n
+        for j in range(n):
+            u = (a_u[lo + j, c] - mean_u) * taper[j]
+            relative[i, j] = u - (a_s[lo + j, c] - mean_s) * taper[j]
+            wheel[i, j] = u
+    return relative, wheel
