@@ -66,6 +66,7 @@ No MuJoCo here: the functions consume arrays.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -134,18 +135,29 @@ def integrate(acc: npt.ArrayLike, dt: float, order: int | tuple[int, ...], highp
     n = x.shape[-1]
     size = step * scipy.fft.next_fast_len(-(-n // step), real=True)
     spectrum = scipy.fft.rfft(x - x.mean(axis=-1, keepdims=True), n=size, axis=-1)
+    orders = (order,) if isinstance(order, int) else tuple(order)
+    gains = _integration_gains(size, float(dt), orders, float(highpass_hz), float(lag_s), step)
+    spectrum = spectrum[..., : gains.shape[1]]
+    out = [scipy.fft.irfft(spectrum * gain, n=size // step, axis=-1)[..., : -(-n // step)] for gain in gains]
+    return out[0] if isinstance(order, int) else tuple(out)
+
+
+@functools.lru_cache(maxsize=64)
+def _integration_gains(size: int, dt: float, orders: tuple[int, ...], highpass_hz: float, lag_s: float,
+                       step: int) -> np.ndarray:  # fmt: skip
+    """:func:`integrate`'s gain per order (len(orders), size // step // 2 + 1) on a `size`-point
+    transform's bins up to the new Nyquist frequency: 1/(iω)^k/step above `highpass_hz`, 0 below,
+    the first order's delayed by `lag_s`. Made once per transform and settings (read only)."""
     kept = size // step // 2 + 1
     omega = 2.0 * np.pi * np.fft.rfftfreq(size, dt)[:kept]
-    spectrum = spectrum[..., :kept]
     keep = omega > 2.0 * np.pi * highpass_hz
-    out = []
-    for k in (order,) if isinstance(order, int) else order:
-        gain = np.zeros(omega.size, dtype=complex)
+    gains = np.zeros((len(orders), kept), dtype=complex)
+    for gain, k in zip(gains, orders, strict=True):
         gain[keep] = 1.0 / (1j * omega[keep]) ** k / step
         if k == 1 and lag_s:
             gain *= np.exp(-1j * omega * lag_s)
-        out.append(scipy.fft.irfft(spectrum * gain, n=size // step, axis=-1)[..., : -(-n // step)])
-    return out[0] if isinstance(order, int) else tuple(out)
+    gains.flags.writeable = False
+    return gains
 
 
 def corner_signals(
@@ -242,8 +254,7 @@ def _stiffness_grid(stiffness_grid: npt.ArrayLike) -> np.ndarray:
 
 def band_of(m: int, dt: float, band_hz: tuple[float, float]) -> np.ndarray:
     """The angular frequencies (rad/s) of an `m`-sample window's DFT bins strictly inside `band_hz`."""
-    freq = np.fft.rfftfreq(m, dt)
-    return 2.0 * np.pi * freq[(freq > band_hz[0]) & (freq < band_hz[1])]
+    return 2.0 * np.pi * _window_basis(m, float(dt), tuple(band_hz))[0]
 
 
 def window_moments(
@@ -264,10 +275,8 @@ def window_moments(
     if not (np.isfinite(delay_s) and delay_s > 0):
         raise InputError(f"closure_objective: delay_s must be > 0 s, got {delay_s!r}")
     shift = int(round(delay_s / dt))
-    freq = np.fft.rfftfreq(m, dt)
-    band = (freq > band_hz[0]) & (freq < band_hz[1])
-    phase = np.exp(-1j * 2.0 * np.pi * freq[band] * (delay_s - shift * dt))
-    hann = np.hanning(m)
+    band_freq, band, hann = _window_basis(m, float(dt), tuple(band_hz))
+    phase = np.exp(-1j * 2.0 * np.pi * band_freq * (delay_s - shift * dt))
     picked = []
     for start in starts:
         r, f = slice(start, start + m), slice(start - shift, start - shift + m)
@@ -275,7 +284,7 @@ def window_moments(
             continue
         if rear.usable[r].all() and front.usable[f].all():
             picked.append((r, f))
-    out = np.zeros((MOMENTS, int(band.sum())), dtype=complex)
+    out = np.zeros((MOMENTS, band_freq.size), dtype=complex)
     if not picked:
         return out, 0
     stack = np.stack([np.stack([rear.z_u[r], rear.force[r], front.z_u[f], front.force[f]])
@@ -287,6 +296,19 @@ def window_moments(
     out[0], out[1], out[2] = np.sum(np.abs(a) ** 2, 0), np.sum(np.abs(b) ** 2, 0), np.sum(np.abs(c) ** 2, 0)
     out[3], out[4], out[5] = np.sum(b * a.conj(), 0), np.sum(c * a.conj(), 0), np.sum(b * c.conj(), 0)
     return out, len(picked)
+
+
+@functools.lru_cache(maxsize=16)
+def _window_basis(m: int, dt: float, band_hz: tuple[float, float]) -> tuple[np.ndarray, slice, np.ndarray]:
+    """An `m`-sample window's DFT frequencies strictly inside `band_hz` (Hz), the slice of the bins
+    that holds them, and the Hann window (:func:`window_moments`); made once per window (read only)."""
+    freq = np.fft.rfftfreq(m, dt)
+    inside = np.flatnonzero((freq > band_hz[0]) & (freq < band_hz[1]))
+    band = slice(int(inside[0]), int(inside[-1]) + 1) if inside.size else slice(0, 0)
+    hann = np.hanning(m)
+    for a in (freq, hann):
+        a.flags.writeable = False
+    return freq[band], band, hann
 
 
 def closure_weights(
