@@ -330,7 +330,8 @@ def objective_on_grid(moments: np.ndarray, weights: tuple[np.ndarray, np.ndarray
     """J (G_f, G_r) on the grid of `weights` (:func:`closure_weights`) from the summed moments
     (:data:`MOMENTS`, F): the sums of :func:`objective_from_moments` (the reference the tests compare
     it against), compiled and without its (G_f, G_r, F) temporaries: the online monitor's J per update
-    (0.06 ms on a 44 × 44 grid and 77 frequencies, against 0.7 ms as one product with a 10 MB matrix)."""
+    (44 × 44 grid, 77 frequencies: 0.08 ms, against 0.2 ms in a loop for the product with a 10.7 MB
+    matrix that it replaced, and about 0.8 ms for that product in the monitor, its matrix out of cache)."""
     x_f, x_r, inv_var = weights
     out = np.empty(inv_var.shape[:2])
     _objective_sums(np.ascontiguousarray(x_f), np.ascontiguousarray(x_r), np.ascontiguousarray(inv_var),
