@@ -77,7 +77,12 @@ import scipy.signal
 
 from suvtwin.errors import InputError
 from suvtwin.jit import cached_njit
-from suvtwin.suspension_law import SuspensionLaw, damper_force, equivalent_spring_rate, spring_force
+from suvtwin.suspension_law import (  # _damper, _force: the laws' compiled forms, for _force_balance
+    SuspensionLaw,
+    _damper,
+    _force,
+    equivalent_spring_rate,
+)
 
 __all__ = ["MOMENTS", "ClosureFit", "CornerParts", "CornerSignals", "band_of", "closure_objective",
            "closure_weights", "corner_signals", "integrate", "objective_from_moments", "objective_on_grid",
@@ -197,13 +202,28 @@ def _corner_signal(acc_u, z_u, motion, rate, motion_other, parts: CornerParts, m
     mean = s0
     if jacking:
         mean = float(equivalent_spring_rate(law, s0, float(motion.std()), float(rate.std()))[0])
-    travel = motion + mean
-    spring = spring_force(travel, law) - float(spring_force(np.array([s0]), law)[0])
-    bar = parts.anti_roll * (motion - motion_other)
-    force = parts.unsprung_mass * acc_u + spring + damper_force(rate, law) + bar
-    usable = ((parts.static_load + force > min_load_share * parts.static_load)
-              & (travel < law.bump_clearance) & (travel > -law.rebound_clearance))  # fmt: skip
+    force, usable = np.empty(motion.size), np.empty(motion.size, dtype=bool)
+    _force_balance(np.ascontiguousarray(acc_u, dtype=float), np.ascontiguousarray(motion, dtype=float),
+                   np.ascontiguousarray(rate, dtype=float), np.ascontiguousarray(motion_other, dtype=float),
+                   law.values, mean, s0, parts.unsprung_mass, parts.anti_roll, parts.static_load,
+                   min_load_share, force, usable)  # fmt: skip
     return CornerSignals(z_u, force, usable, parts)
+
+
+@cached_njit
+def _force_balance(acc_u, motion, rate, motion_other, q, mean, s0, mass, anti_roll, static_load, min_share,
+                   force, usable):  # fmt: skip
+    """Per sample, the wheel's dynamic tyre force (N) m_us a_u + F_s(mean + motion) − F_s(s0) + F_d(rate)
+    + k_arb (motion − motion_other) into `force`, and into `usable` whether the tyre's load exceeds
+    `min_share` of `static_load` with the travel mean + motion between the stops; `q` the law's
+    :attr:`~suvtwin.suspension_law.SuspensionLaw.values` (:func:`_corner_signal`, in one pass)."""
+    spring0 = _force(q, s0)
+    for i in range(motion.size):
+        travel = motion[i] + mean
+        f = mass * acc_u[i] + (_force(q, travel) - spring0) + _damper(q, rate[i])
+        f += anti_roll * (motion[i] - motion_other[i])
+        force[i] = f
+        usable[i] = (static_load + f > min_share * static_load) and travel < q[2] and travel > -q[5]
 
 
 def _noise_gain(parts: CornerParts, x: np.ndarray, omega: np.ndarray) -> np.ndarray:
