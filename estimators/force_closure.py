@@ -311,11 +311,26 @@ def window_moments(
                       for r, f in picked])  # fmt: skip
     # each signal's mean under the window removed (its leakage into the band)
     dft = np.fft.rfft((stack - (stack @ hann)[..., None] / hann.sum()) * hann, axis=-1)[..., band]  # W, 4, F
-    a = dft[:, 0] - dft[:, 2] * phase
-    b, c = dft[:, 1], dft[:, 3] * phase
-    out[0], out[1], out[2] = np.sum(np.abs(a) ** 2, 0), np.sum(np.abs(b) ** 2, 0), np.sum(np.abs(c) ** 2, 0)
-    out[3], out[4], out[5] = np.sum(b * a.conj(), 0), np.sum(c * a.conj(), 0), np.sum(b * c.conj(), 0)
+    _moment_sums(np.ascontiguousarray(dft), phase, out)
     return out, len(picked)
+
+
+@cached_njit
+def _moment_sums(dft, phase, out):
+    """Add to `out` (:data:`MOMENTS`, F) each window's moments from its band's DFTs `dft` (W, 4, F) of
+    (Z_u,r, F_r, Z_u,f, F_f) and the delay's fractional `phase` (F,): with a = Z_u,r − Z_u,f·phase,
+    b = F_r, c = F_f·phase, |a|², |b|², |c|², b ā, c ā, b c̄ (:func:`window_moments`), the windows in order."""
+    for w in range(dft.shape[0]):
+        for f in range(dft.shape[2]):
+            a = dft[w, 0, f] - dft[w, 2, f] * phase[f]
+            b = dft[w, 1, f]
+            c = dft[w, 3, f] * phase[f]
+            out[0, f] += abs(a) ** 2
+            out[1, f] += abs(b) ** 2
+            out[2, f] += abs(c) ** 2
+            out[3, f] += b * a.conjugate()
+            out[4, f] += c * a.conjugate()
+            out[5, f] += b * c.conjugate()
 
 
 @functools.lru_cache(maxsize=16)
