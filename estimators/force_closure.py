@@ -51,13 +51,16 @@ the noise, were white) is too sharp: ±2σ held the truth for 78 % of the tyres 
 
 Online (:class:`ClosureStream`): J is a quadratic form in each window's DFTs, so a window is kept as
 its six moments per frequency (:func:`window_moments`) and J on any grid follows from their sums
-(:func:`objective_from_moments`, the noise's weights made once per grid by :func:`closure_weights`).
+(:func:`objective_from_moments`; compiled, :func:`objective_on_grid`; the noise's weights made once per
+grid by :func:`closure_weights`).
 The stream takes the four corners' samples in time order and analyses each window once the stream
 holds ``margin_s`` beyond it, from its own span (the window, its front's delay and a margin each
 side, tapered), so a window's moments do not depend on how the stream was cut; at 200 Hz (the
 spectrum cut there first). On the first 30 ``constant`` runs fed from the start in 2 s blocks, the
 damper's timing half the simulator's step: −0.9 ± 7.1 kPa at 10 s, +0.1 ± 3.0 at 20 s, +0.5 ± 2.2 at
-30 s (80 of 120 tyres: classes A–C); cost about 1 ms per second of four-corner data. The online
+30 s (80 of 120 tyres: classes A–C); cost 0.39–0.57 ms per second of four-corner data fed in 4 s
+blocks, the monitor's (0.75–0.85 before the spans' samples, forces and moments were taken in compiled
+passes: alternated on one core of the 2-core machine, 2026-12-05). The online
 monitor (:mod:`suvtwin.estimators.monitor`) takes each update's windows as a likelihood of the two
 tyres' pressures and adds a model-error floor to its σ.
 

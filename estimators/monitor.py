@@ -1466,7 +1466,8 @@ class TyreMonitor:
             status = np.where(status == _USED, row, status)
         # a window whose only problem is a gap keeps its data after the gap (at least a quarter window)
         tail = np.full(n_c, t.size)
-        gap_only = np.all(np.isin(s.blocks[-n_blocks:], (_USED, _GAP)), axis=0) & (status == _GAP)
+        recent = s.blocks[-n_blocks:]
+        gap_only = np.all((recent == _USED) | (recent == _GAP), axis=0) & (status == _GAP)
         for c in np.flatnonzero(gap_only):
             bad = np.flatnonzero(~(np.isfinite(a_s[:, c]) & np.isfinite(a_u[:, c])))
             after = t.size - 1 - bad[-1]
