@@ -51,13 +51,16 @@ the noise, were white) is too sharp: ±2σ held the truth for 78 % of the tyres 
 
 Online (:class:`ClosureStream`): J is a quadratic form in each window's DFTs, so a window is kept as
 its six moments per frequency (:func:`window_moments`) and J on any grid follows from their sums
-(:func:`objective_from_moments`, the noise's weights made once per grid by :func:`closure_weights`).
+(:func:`objective_from_moments`; compiled, :func:`objective_on_grid`; the noise's weights made once per
+grid by :func:`closure_weights`).
 The stream takes the four corners' samples in time order and analyses each window once the stream
 holds ``margin_s`` beyond it, from its own span (the window, its front's delay and a margin each
 side, tapered), so a window's moments do not depend on how the stream was cut; at 200 Hz (the
 spectrum cut there first). On the first 30 ``constant`` runs fed from the start in 2 s blocks, the
 damper's timing half the simulator's step: −0.9 ± 7.1 kPa at 10 s, +0.1 ± 3.0 at 20 s, +0.5 ± 2.2 at
-30 s (80 of 120 tyres: classes A–C); cost about 1 ms per second of four-corner data. The online
+30 s (80 of 120 tyres: classes A–C); cost 0.39–0.57 ms per second of four-corner data fed in 4 s
+blocks, the monitor's (0.75–0.85 before the spans' samples, forces and moments were taken in compiled
+passes: alternated on one core of the 2-core machine, 2026-12-05). The online
 monitor (:mod:`suvtwin.estimators.monitor`) takes each update's windows as a likelihood of the two
 tyres' pressures and adds a model-error floor to its σ.
 
@@ -86,12 +89,17 @@ import scipy.fft
 import scipy.signal
 
 from suvtwin.errors import InputError
-from suvtwin.suspension_law import SuspensionLaw, damper_force, equivalent_spring_rate, spring_force
+from suvtwin.jit import cached_njit
+from suvtwin.suspension_law import (  # _damper, _force: the laws' compiled forms, for _force_balance
+    SuspensionLaw,
+    _damper,
+    _force,
+    equivalent_spring_rate,
+)
 
 __all__ = ["MOMENTS", "ClosureFit", "CornerParts", "CornerSignals", "band_of", "closure_objective",
-           "closure_operator", "closure_weights", "corner_signals", "integrate", "objective_from_moments",
-           "real_moments", "window_moments", "windows_moments", "ClosureBlock", "ClosureConfig",
-           "ClosureStream"]  # fmt: skip
+           "closure_weights", "corner_signals", "integrate", "objective_from_moments", "objective_on_grid",
+           "window_moments", "windows_moments", "ClosureBlock", "ClosureConfig", "ClosureStream"]  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -109,10 +117,6 @@ class CornerParts:
     static_travel: float
     static_load: float
 
-    @functools.cached_property
-    def static_spring_force(self) -> float:
-        """The spring's force at the static travel beyond its preload, N (:func:`spring_force`)."""
-        return float(spring_force(np.array([self.static_travel]), self.law)[0])
 
 
 @dataclass(frozen=True)
@@ -150,18 +154,29 @@ def integrate(acc: npt.ArrayLike, dt: float, order: int | tuple[int, ...], highp
     n = x.shape[-1]
     size = step * scipy.fft.next_fast_len(-(-n // step), real=True)
     spectrum = scipy.fft.rfft(x - x.mean(axis=-1, keepdims=True), n=size, axis=-1)
+    orders = (order,) if isinstance(order, int) else tuple(order)
+    gains = _integration_gains(size, float(dt), orders, float(highpass_hz), float(lag_s), step)
+    spectrum = spectrum[..., : gains.shape[1]]
+    out = [scipy.fft.irfft(spectrum * gain, n=size // step, axis=-1)[..., : -(-n // step)] for gain in gains]
+    return out[0] if isinstance(order, int) else tuple(out)
+
+
+@functools.lru_cache(maxsize=64)
+def _integration_gains(size: int, dt: float, orders: tuple[int, ...], highpass_hz: float, lag_s: float,
+                       step: int) -> np.ndarray:  # fmt: skip
+    """:func:`integrate`'s gain per order (len(orders), size // step // 2 + 1) on a `size`-point
+    transform's bins up to the new Nyquist frequency: 1/(iω)^k/step above `highpass_hz`, 0 below,
+    the first order's delayed by `lag_s`. Made once per transform and settings (read only)."""
     kept = size // step // 2 + 1
     omega = 2.0 * np.pi * np.fft.rfftfreq(size, dt)[:kept]
-    spectrum = spectrum[..., :kept]
     keep = omega > 2.0 * np.pi * highpass_hz
-    out = []
-    for k in (order,) if isinstance(order, int) else order:
-        gain = np.zeros(omega.size, dtype=complex)
+    gains = np.zeros((len(orders), kept), dtype=complex)
+    for gain, k in zip(gains, orders, strict=True):
         gain[keep] = 1.0 / (1j * omega[keep]) ** k / step
         if k == 1 and lag_s:
             gain *= np.exp(-1j * omega * lag_s)
-        out.append(scipy.fft.irfft(spectrum * gain, n=size // step, axis=-1)[..., : -(-n // step)])
-    return out[0] if isinstance(order, int) else tuple(out)
+    gains.flags.writeable = False
+    return gains
 
 
 def corner_signals(
@@ -201,13 +216,28 @@ def _corner_signal(acc_u, z_u, motion, rate, motion_other, parts: CornerParts, m
     mean = s0
     if jacking:
         mean = float(equivalent_spring_rate(law, s0, float(motion.std()), float(rate.std()))[0])
-    travel = motion + mean
-    spring = spring_force(travel, law) - parts.static_spring_force
-    bar = parts.anti_roll * (motion - motion_other)
-    force = parts.unsprung_mass * acc_u + spring + damper_force(rate, law) + bar
-    usable = ((parts.static_load + force > min_load_share * parts.static_load)
-              & (travel < law.bump_clearance) & (travel > -law.rebound_clearance))  # fmt: skip
+    force, usable = np.empty(motion.size), np.empty(motion.size, dtype=bool)
+    _force_balance(np.ascontiguousarray(acc_u, dtype=float), np.ascontiguousarray(motion, dtype=float),
+                   np.ascontiguousarray(rate, dtype=float), np.ascontiguousarray(motion_other, dtype=float),
+                   law.values, mean, s0, parts.unsprung_mass, parts.anti_roll, parts.static_load,
+                   min_load_share, force, usable)  # fmt: skip
     return CornerSignals(z_u, force, usable, parts)
+
+
+@cached_njit
+def _force_balance(acc_u, motion, rate, motion_other, q, mean, s0, mass, anti_roll, static_load, min_share,
+                   force, usable):  # fmt: skip
+    """Per sample, the wheel's dynamic tyre force (N) m_us a_u + F_s(mean + motion) − F_s(s0) + F_d(rate)
+    + k_arb (motion − motion_other) into `force`, and into `usable` whether the tyre's load exceeds
+    `min_share` of `static_load` with the travel mean + motion between the stops; `q` the law's
+    :attr:`~suvtwin.suspension_law.SuspensionLaw.values` (:func:`_corner_signal`, in one pass)."""
+    spring0 = _force(q, s0)
+    for i in range(motion.size):
+        travel = motion[i] + mean
+        f = mass * acc_u[i] + (_force(q, travel) - spring0) + _damper(q, rate[i])
+        f += anti_roll * (motion[i] - motion_other[i])
+        force[i] = f
+        usable[i] = (static_load + f > min_share * static_load) and travel < q[2] and travel > -q[5]
 
 
 def _noise_gain(parts: CornerParts, x: np.ndarray, omega: np.ndarray) -> np.ndarray:
@@ -258,8 +288,7 @@ def _stiffness_grid(stiffness_grid: npt.ArrayLike) -> np.ndarray:
 
 def band_of(m: int, dt: float, band_hz: tuple[float, float]) -> np.ndarray:
     """The angular frequencies (rad/s) of an `m`-sample window's DFT bins strictly inside `band_hz`."""
-    freq = np.fft.rfftfreq(m, dt)
-    return 2.0 * np.pi * freq[(freq > band_hz[0]) & (freq < band_hz[1])]
+    return 2.0 * np.pi * _window_basis(m, float(dt), tuple(band_hz))[0]
 
 
 def window_moments(
@@ -296,9 +325,8 @@ def windows_moments(
     F) summed over the usable `m`-sample Hann windows whose rear starts at `rear_at` (W,) and front at
     `front_at` (W,) (sample indices: the delay's whole samples), the delay's remaining `fraction_s`
     (W,) s a phase; and how many were usable per track (T,)."""
-    freq = np.fft.rfftfreq(m, dt)
-    band = (freq > band_hz[0]) & (freq < band_hz[1])
-    out = np.zeros((len(rears), MOMENTS, int(band.sum())), dtype=complex)
+    band_freq, band, hann = _window_basis(m, float(dt), tuple(band_hz))
+    out = np.zeros((len(rears), MOMENTS, band_freq.size), dtype=complex)
     used = np.zeros(len(rears), dtype=int)
     if rear_at.size == 0:
         return out, used
@@ -308,22 +336,47 @@ def windows_moments(
                    for front, rear in zip(fronts, rears, strict=True)])  # (T, W)  # fmt: skip
     if not ok.any():
         return out, used
-    hann = np.hanning(m)
     # (T, W, 4, m): per track and window the rear's height and force, the front's delayed ones
     stack = np.stack([np.stack([rear.z_u[r_idx], rear.force[r_idx], front.z_u[f_idx], front.force[f_idx]],
                                axis=1) for front, rear in zip(fronts, rears, strict=True)])  # fmt: skip
     # each signal's mean under the window removed (its leakage into the band); (T, W, 4, F)
     dft = np.fft.rfft((stack - (stack @ hann)[..., None] / hann.sum()) * hann, axis=-1)[..., band]
-    phase = np.exp(-1j * 2.0 * np.pi * np.outer(fraction_s, freq[band]))  # (W, F)
-    a = dft[:, :, 0] - dft[:, :, 2] * phase
-    b, c = dft[:, :, 1], dft[:, :, 3] * phase
-    w = ok[..., None].astype(float)  # the unusable windows weigh nothing
-    out[:, 0] = np.sum(w * np.abs(a) ** 2, 1)
-    out[:, 1] = np.sum(w * np.abs(b) ** 2, 1)
-    out[:, 2] = np.sum(w * np.abs(c) ** 2, 1)
-    out[:, 3], out[:, 4], out[:, 5] = (np.sum(w * b * a.conj(), 1), np.sum(w * c * a.conj(), 1),
-                                       np.sum(w * b * c.conj(), 1))  # fmt: skip
+    phase = np.exp(-1j * 2.0 * np.pi * np.outer(fraction_s, band_freq))  # (W, F)
+    for i, keep in enumerate(ok):  # each track's usable windows
+        if keep.any():
+            _moment_sums(np.ascontiguousarray(dft[i, keep]), np.ascontiguousarray(phase[keep]), out[i])
     return out, ok.sum(axis=1)
+
+
+@cached_njit
+def _moment_sums(dft, phase, out):
+    """Add to `out` (:data:`MOMENTS`, F) each window's moments from its band's DFTs `dft` (W, 4, F) of
+    (Z_u,r, F_r, Z_u,f, F_f) and its delay's fractional `phase` (W, F): with a = Z_u,r − Z_u,f·phase,
+    b = F_r, c = F_f·phase, |a|², |b|², |c|², b ā, c ā, b c̄ (:func:`window_moments`), the windows in order."""
+    for w in range(dft.shape[0]):
+        for f in range(dft.shape[2]):
+            a = dft[w, 0, f] - dft[w, 2, f] * phase[w, f]
+            b = dft[w, 1, f]
+            c = dft[w, 3, f] * phase[w, f]
+            out[0, f] += abs(a) ** 2
+            out[1, f] += abs(b) ** 2
+            out[2, f] += abs(c) ** 2
+            out[3, f] += b * a.conjugate()
+            out[4, f] += c * a.conjugate()
+            out[5, f] += b * c.conjugate()
+
+
+@functools.lru_cache(maxsize=16)
+def _window_basis(m: int, dt: float, band_hz: tuple[float, float]) -> tuple[np.ndarray, slice, np.ndarray]:
+    """An `m`-sample window's DFT frequencies strictly inside `band_hz` (Hz), the slice of the bins
+    that holds them, and the Hann window (:func:`window_moments`); made once per window (read only)."""
+    freq = np.fft.rfftfreq(m, dt)
+    inside = np.flatnonzero((freq > band_hz[0]) & (freq < band_hz[1]))
+    band = slice(int(inside[0]), int(inside[-1]) + 1) if inside.size else slice(0, 0)
+    hann = np.hanning(m)
+    for a in (freq, hann):
+        a.flags.writeable = False
+    return freq[band], band, hann
 
 
 def closure_weights(
@@ -341,27 +394,46 @@ def closure_weights(
     return x_f, x_r, 1.0 / (noise_sigma**2 * np.sum(hann**2) * gains)
 
 
-def closure_operator(weights: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
-    """J as a linear map of the moments: the (G_f·G_r, 9·F) matrix that takes :func:`real_moments` to
-    J on the grid of `weights` (:func:`closure_weights`): what :func:`objective_from_moments` sums,
-    its coefficients made once, so each J is one matrix–vector product."""
+def objective_on_grid(moments: np.ndarray, weights: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
+    """J (G_f, G_r) on the grid of `weights` (:func:`closure_weights`) from the summed moments
+    (:data:`MOMENTS`, F): the sums of :func:`objective_from_moments` (the reference the tests compare
+    it against), compiled and without its (G_f, G_r, F) temporaries: the online monitor's J per update
+    (44 × 44 grid, 77 frequencies: 0.08 ms, against 0.2 ms in a loop for the product with a 10.7 MB
+    matrix that it replaced, and about 0.8 ms for that product in the monitor, its matrix out of cache)."""
     x_f, x_r, inv_var = weights
-    xr, xf = x_r[None, :, :], x_f[:, None, :]
-    cross = xr * xf.conj()
-    w = inv_var
-    parts = [w, w * np.abs(xr) ** 2, w * np.abs(xf) ** 2, 2.0 * w * xr.real, -2.0 * w * xr.imag,
-             -2.0 * w * xf.real, 2.0 * w * xf.imag, -2.0 * w * cross.real, 2.0 * w * cross.imag]  # fmt: skip
+    out = np.empty(inv_var.shape[:2])
+    _objective_sums(np.ascontiguousarray(x_f), np.ascontiguousarray(x_r), np.ascontiguousarray(inv_var),
+                    np.ascontiguousarray(moments, dtype=complex), out)  # fmt: skip
+    return out
+
+
+@cached_njit(fastmath={"reassoc", "contract"})
+def _objective_sums(x_f, x_r, inv_var, moments, out):
+    """out[g, h] = Σ_f inv_var[g, h, f] (R[h, f] + Q[g, f] − 2 Re(x_r[h, f] conj(x_f[g, f]) s_bc[f])):
+    R the rear's terms, Q the front's (:func:`objective_from_moments`), each made once per grid row."""
     g_f, g_r, n_f = inv_var.shape
-    return np.ascontiguousarray(np.stack([np.broadcast_to(q, inv_var.shape) for q in parts], axis=2)).reshape(
-        g_f * g_r, 9 * n_f)  # fmt: skip
-
-
-def real_moments(moments: np.ndarray) -> np.ndarray:
-    """The moments (:data:`MOMENTS`, F) as the real vector :func:`closure_operator` takes (9·F,):
-    |a|², |b|², |c|², then the real and imaginary parts of b ā, c ā, b c̄, each over F."""
-    saa, sbb, scc, sba, sca, sbc = moments
-    return np.concatenate([saa.real, sbb.real, scc.real, sba.real, sba.imag, sca.real, sca.imag, sbc.real,
-                           sbc.imag])  # fmt: skip
+    rear = np.empty((g_r, n_f))
+    cross_re, cross_im = np.empty((g_r, n_f)), np.empty((g_r, n_f))
+    front = np.empty((g_f, n_f))
+    for h in range(g_r):
+        for f in range(n_f):
+            x = x_r[h, f]
+            rear[h, f] = (moments[0, f].real + (x.real * x.real + x.imag * x.imag) * moments[1, f].real
+                          + 2.0 * (x * moments[3, f]).real)  # fmt: skip
+            xb = x * moments[5, f]  # x_r s_bc: its product with conj(x_f) is the cross term
+            cross_re[h, f], cross_im[h, f] = xb.real, xb.imag
+    for g in range(g_f):
+        for f in range(n_f):
+            x = x_f[g, f]
+            front[g, f] = ((x.real * x.real + x.imag * x.imag) * moments[2, f].real
+                           - 2.0 * (x * moments[4, f]).real)  # fmt: skip
+    for g in range(g_f):
+        for h in range(g_r):
+            total = 0.0
+            for f in range(n_f):
+                cross = cross_re[h, f] * x_f[g, f].real + cross_im[h, f] * x_f[g, f].imag
+                total += inv_var[g, h, f] * (rear[h, f] + front[g, f] - 2.0 * cross)
+            out[g, h] = total
 
 
 def objective_from_moments(
@@ -475,7 +547,7 @@ class ClosureStream:
         self.margin = q * int(math.ceil(cfg.margin_s / (q * dt)))
         self.max_shift = q * int(math.ceil(self.wheelbase / cfg.min_speed_mps / (q * dt)) + 1)
         self.n_bins = band_of(self.m // q, q * dt, cfg.band_hz).size
-        self._tapers: dict[int, np.ndarray] = {}
+        self._tapers: dict[int, np.ndarray] = {}  # the spans' tapers by length (_analyse)
         self.reset()
 
     def weights(self, front: int, rear: int, k_front, k_rear, *, tyre_damping: float, noise_sigma: float):
@@ -488,10 +560,10 @@ class ClosureStream:
                                noise_sigma=noise_sigma / math.sqrt(self.q))  # fmt: skip
 
     def _taper(self, n: int) -> np.ndarray:
-        """The `n`-sample span's Tukey taper (n, 1): the margins each side from zero up to one (made once
+        """The `n`-sample span's Tukey taper (n,): the margins each side from zero up to one (made once
         per span length: a stream's spans have one length)."""
         if n not in self._tapers:
-            self._tapers[n] = scipy.signal.windows.tukey(n, 2.0 * self.margin / n)[:, None]
+            self._tapers[n] = scipy.signal.windows.tukey(n, 2.0 * self.margin / n)
         return self._tapers[n]
 
     def reset(self) -> None:
@@ -507,7 +579,9 @@ class ClosureStream:
         (gravity removed), `valid` (n,) bool (False: a gap or a faulty sample in any corner)."""
         v = np.asarray(speed_mps, dtype=float)
         a_s, a_u = np.asarray(acc_sprung, dtype=float), np.asarray(acc_unsprung, dtype=float)
-        finite = np.all(np.isfinite(a_s) & np.isfinite(a_u), axis=1)
+        finite = np.ones(v.size, dtype=bool)
+        for c in range(a_s.shape[1]):  # corner by corner: numpy's all over the rows' four is 5 times slower
+            finite &= np.isfinite(a_s[:, c]) & np.isfinite(a_u[:, c])
         ok = np.asarray(valid, dtype=bool) & np.isfinite(v) & finite
         n_t = len(self.tracks)
         moments = np.zeros((n_t, MOMENTS, self.n_bins), dtype=complex)
@@ -550,14 +624,12 @@ class ClosureStream:
         q, dt = self.q, self.q * self.dt
         lo = starts[0] - self.max_shift - self.margin - self._first
         hi = starts[-1] + self.m + self.margin - self._first
-        a_s, a_u = self._a_s[lo:hi], self._a_u[lo:hi]
         # the margins tapered (Tukey) to zero: the integrals' error from the span's ends becomes a slow
         # drift in the windows instead of the circular FFT's jump
         taper = self._taper(hi - lo)
-        a_s, a_u = (a_s - a_s.mean(axis=0)) * taper, (a_u - a_u.mean(axis=0)) * taper
-        motion, rate = integrate((a_u - a_s)[:, corners].T, self.dt, (2, 1), cfg.highpass_hz,
-                                 cfg.damper_lag_s, step=q)  # fmt: skip
-        z_u, wheel = integrate(a_u[:, corners].T, self.dt, (2, 0), cfg.highpass_hz, step=q)
+        relative, wheel_acc = _tapered_span(self._a_s, self._a_u, lo, hi, taper, np.array(corners))
+        motion, rate = integrate(relative, self.dt, (2, 1), cfg.highpass_hz, cfg.damper_lag_s, step=q)
+        z_u, wheel = integrate(wheel_acc, self.dt, (2, 0), cfg.highpass_hz, step=q)
         signals = {c: _corner_signal(wheel[row[c]], z_u[row[c]], motion[row[c]], rate[row[c]],
                                      motion[row[self.partner[c]]], self.parts[c], cfg.min_load_share)
                    for c in corners}  # fmt: skip
@@ -581,3 +653,25 @@ class ClosureStream:
         moments += part
         windows += used
         skipped += len(kept) - used
+
+
+@cached_njit
+def _tapered_span(a_s, a_u, lo, hi, taper, corners):
+    """Each of `corners`' body and wheel accelerations `a_s`, `a_u` (n, C) over the rows `lo`…`hi`, less
+    their means there, times `taper` (hi − lo,): the wheel's minus the body's and the wheel's, two
+    (K, hi − lo) arrays (m/s²), in one pass (:meth:`ClosureStream._analyse`)."""
+    n = hi - lo
+    relative, wheel = np.empty((corners.size, n)), np.empty((corners.size, n))
+    for i in range(corners.size):
+        c = corners[i]
+        mean_s = mean_u = 0.0
+        for j in range(lo, hi):
+            mean_s += a_s[j, c]
+            mean_u += a_u[j, c]
+        mean_s /= n
+        mean_u /= n
+        for j in range(n):
+            u = (a_u[lo + j, c] - mean_u) * taper[j]
+            relative[i, j] = u - (a_s[lo + j, c] - mean_s) * taper[j]
+            wheel[i, j] = u
+    return relative, wheel

@@ -186,8 +186,7 @@ from suvtwin.estimators.force_closure import (
     ClosureConfig,
     ClosureStream,
     CornerParts,
-    closure_operator,
-    real_moments,
+    objective_on_grid,
 )
 from suvtwin.estimators.full_car import (
     axle_coherence_parts,
@@ -808,27 +807,39 @@ def _redraw(moved, redraw, road, prior_db, prior_full):
                         moved[c, r, d, b, p] *= inv
 
 
+_EXP_ZERO = -746.0
+"""Below this, math.exp gives exactly 0.0 (the smallest subnormal is e^−744.4): not taken."""
+
+
 @cached_njit
 def _bayes(post, rows, fine):
     """Bayes' rule in place: corner rows[u]'s posterior `post` (C, R, D, B, P) times exp(fine[u]) (U, D, B, P)
     (the window's weighted log-likelihood on the 1 kPa grid, shifted by its maximum), normalized; a
-    corner whose product has no finite positive mass keeps its posterior (:meth:`TyreMonitor._correct`)."""
+    corner whose product has no finite positive mass keeps its posterior (:meth:`TyreMonitor._correct`).
+    `fine` may be (U, 1, 1, P): the same likelihood for every (damping, slope), each exponential taken
+    once (the force closure's, :meth:`TyreMonitor._correct_closure`)."""
     n_r, n_d, n_b, n_p = post.shape[1:]
-    like = np.empty((n_d, n_b, n_p))
+    f_d, f_b = fine.shape[1], fine.shape[2]
+    like = np.empty((f_d, f_b, n_p))
     for u in range(rows.size):
         c = rows[u]
         top = -np.inf
-        for d in range(n_d):
-            for b in range(n_b):
+        for d in range(f_d):
+            for b in range(f_b):
                 for p in range(n_p):
                     top = max(top, fine[u, d, b, p])
+        for d in range(f_d):
+            for b in range(f_b):
+                for p in range(n_p):
+                    x = fine[u, d, b, p] - top
+                    like[d, b, p] = math.exp(x) if x > _EXP_ZERO else 0.0
         total = 0.0
         for d in range(n_d):
             for b in range(n_b):
                 for p in range(n_p):
-                    like[d, b, p] = math.exp(fine[u, d, b, p] - top)
+                    x = like[d % f_d, b % f_b, p]
                     for r in range(n_r):
-                        total += post[c, r, d, b, p] * like[d, b, p]
+                        total += post[c, r, d, b, p] * x
         if not (total > 0.0 and math.isfinite(total)):
             continue
         inv = 1.0 / total
@@ -836,13 +847,28 @@ def _bayes(post, rows, fine):
             for d in range(n_d):
                 for b in range(n_b):
                     for p in range(n_p):
-                        post[c, r, d, b, p] = post[c, r, d, b, p] * like[d, b, p] * inv
+                        post[c, r, d, b, p] = post[c, r, d, b, p] * like[d % f_d, b % f_b, p] * inv
 
 
-def _logsumexp(a: np.ndarray, axis) -> np.ndarray:
-    m = np.max(a, axis=axis, keepdims=True)
-    m = np.where(np.isfinite(m), m, 0.0)
-    return np.squeeze(m, axis=axis) + np.log(np.sum(np.exp(a - m), axis=axis))
+@cached_njit
+def _logsumexp(a: np.ndarray) -> np.ndarray:
+    """log Σ exp along the last axis of `a` (R, N), each row shifted by its maximum (by 0 where that is
+    not finite), compiled."""
+    n_r, n_n = a.shape
+    out = np.empty(n_r)
+    for i in range(n_r):
+        top = -np.inf
+        for j in range(n_n):
+            top = max(top, a[i, j])
+        if not math.isfinite(top):
+            top = 0.0
+        total = 0.0
+        for j in range(n_n):
+            x = a[i, j] - top
+            if x > _EXP_ZERO:  # below, exp(x) is 0.0: most of the closure's (J is sharp), skipped
+                total += math.exp(x)
+        out[i] = top + math.log(total)
+    return out
 
 
 @dataclass
@@ -990,7 +1016,7 @@ class TyreMonitor:
         )
         self._prior_var = cfg.prior_sigma_kpa**2
         log_prior = -0.5 * (self._p_grid[None, :] - self._prior[:, None]) ** 2 / self._prior_var
-        self._log_prior = log_prior - _logsumexp(log_prior, axis=1)[:, None]  # (C, P)
+        self._log_prior = log_prior - _logsumexp(log_prior)[:, None]  # (C, P)
         n_d = cfg.damping_points
         self._fine = fine
         # each corner's tyre stiffness on the coarse pressure grid (eq. 3–4), N/m
@@ -1066,7 +1092,7 @@ class TyreMonitor:
             for f, r in self.tracks
         ]  # fmt: skip
         self._laws = np.array([[t.kt0, t.p0, t.pfz1] for t in self.tires]).T  # (3, C): eq. 3–4 per corner
-        self._closure, self._closure_operators = self._new_closure(wheelbase_m, closure_config)
+        self._closure, self._closure_weights = self._new_closure(wheelbase_m, closure_config)
         # the prior of (damping, slope): uniform × spike and slab, normalized (D, B)
         prior_db = np.exp(self._w_logprior)[None, :] * np.ones((n_d, 1))
         self._prior_db = prior_db / prior_db.sum()
@@ -1441,7 +1467,8 @@ class TyreMonitor:
             status = np.where(status == _USED, row, status)
         # a window whose only problem is a gap keeps its data after the gap (at least a quarter window)
         tail = np.full(n_c, t.size)
-        gap_only = np.all(np.isin(s.blocks[-n_blocks:], (_USED, _GAP)), axis=0) & (status == _GAP)
+        recent = s.blocks[-n_blocks:]
+        gap_only = np.all((recent == _USED) | (recent == _GAP), axis=0) & (status == _GAP)
         for c in np.flatnonzero(gap_only):
             bad = np.flatnonzero(~(np.isfinite(a_s[:, c]) & np.isfinite(a_u[:, c])))
             after = t.size - 1 - bad[-1]
@@ -1770,8 +1797,8 @@ class TyreMonitor:
         _bayes(s.post, rows.astype(np.int64), fine)
 
     def _new_closure(self, wheelbase_m: float | None, config: ClosureConfig | None):
-        """The force closure's stream and each track's J operator on the coarse pressure grid
-        (:func:`~suvtwin.estimators.force_closure.closure_operator`), or (None, []) where it cannot
+        """The force closure's stream and each track's weights of J on the coarse pressure grid
+        (:func:`~suvtwin.estimators.force_closure.closure_weights`), or (None, []) where it cannot
         run: off in the config, not two tracks, or a corner without its suspension law."""
         cfg = self.config
         if not (cfg.force_closure and len(self.tracks) == 2 and wheelbase_m is not None
@@ -1783,12 +1810,12 @@ class TyreMonitor:
             for c, qc in enumerate(self.models)
         ]  # fmt: skip
         stream = ClosureStream(parts, self.tracks, float(wheelbase_m), self.dt, config)
-        operators = [closure_operator(stream.weights(f, r, self._kt_coarse[f], self._kt_coarse[r],
-                                                     tyre_damping=0.5 * (self.models[f].tire_damping
-                                                                         + self.models[r].tire_damping),
-                                                     noise_sigma=cfg.sigma_accel))
-                     for f, r in self.tracks]  # fmt: skip
-        return stream, operators
+        weights = [stream.weights(f, r, self._kt_coarse[f], self._kt_coarse[r],
+                                  tyre_damping=0.5 * (self.models[f].tire_damping
+                                                      + self.models[r].tire_damping),
+                                  noise_sigma=cfg.sigma_accel)
+                   for f, r in self.tracks]  # fmt: skip
+        return stream, weights
 
     def _correct_closure(self, block, checks: np.ndarray, status: np.ndarray, elapsed: float) -> None:
         r"""Bayes' rule with the force closure's new windows (:class:`~.force_closure.ClosureStream`,
@@ -1836,21 +1863,19 @@ class TyreMonitor:
             counts["closure_skipped"][[f, r]] += found.skipped[i]
             if found.windows[i] == 0:
                 continue
-            # J on the two tyres' coarse grids (f, r): the moments through the track's operator
-            j = (self._closure_operators[i] @ real_moments(found.moments[i])).reshape(self._p_coarse.size, -1)
+            # J on the two tyres' coarse grids (f, r) from the windows' moments
+            j = objective_on_grid(found.moments[i], self._closure_weights[i])
             j_min = float(j.min())
             dof = 2.0 * found.moments.shape[-1] * found.windows[i] / 1.5
             ll = -(j - j_min) / (2.0 * max(j_min / dof, 1e-12))
             marg = post[[f, r]].sum(axis=(1, 2, 3))  # (2, P) the two tyres' marginals
             marg /= marg.sum(axis=1, keepdims=True)
             # the log-likelihood of each coarse pressure of one tyre, the other's summed out (fine grid)
-            msg_f = _logsumexp(ll @ self._to_fine.T, axis=1)
-            msg_r = _logsumexp(ll.T @ self._to_fine.T, axis=1)
+            msg_f = _logsumexp(ll @ self._to_fine.T)
+            msg_r = _logsumexp(ll.T @ self._to_fine.T)
             fine = np.stack([msg_f, msg_r]) @ self._to_fine.T  # (2, P)
             self._take_closure_information([f, r], marg, fine)
-            shape = (2,) + post.shape[2:]
-            _bayes(post, np.array([f, r], dtype=np.int64), np.ascontiguousarray(np.broadcast_to(
-                fine[:, None, None, :], shape)))  # fmt: skip
+            _bayes(post, np.array([f, r], dtype=np.int64), np.ascontiguousarray(fine[:, None, None, :]))
 
     def _take_closure_information(self, corners: list[int], marg: np.ndarray, fine: np.ndarray) -> None:
         """Add to each of `corners` the precision (1/kPa²) the closure's log-likelihood `fine` (U, P)

@@ -385,6 +385,26 @@ def _band_term(q, k, v0):
 
 
 @cached_njit
+def _add_segments(a, b, c, k, k2, load, w, axx, ayy, cxy, moments):
+    """The segments' statistics added in place to each memory's with its weight w (M,), one segment at a
+    time in order: A (M, F) += w |X|², B += w |Y|², C += w X̄Y e^{…} (`axx`, `ayy`, `cxy` (S, F)), K += w,
+    K2 += w², the loads' (M, 2, 3) += w `moments` (S, 2, 3) (:meth:`PreviewTrack._accumulate`: the same
+    products and sums, in the same order, as adding each segment's arrays in numpy, without its
+    per-segment temporaries)."""
+    for s in range(axx.shape[0]):
+        for m in range(w.size):
+            for f in range(axx.shape[1]):
+                a[m, f] += w[m] * axx[s, f]
+                b[m, f] += w[m] * ayy[s, f]
+                c[m, f] += w[m] * cxy[s, f]
+            k[m] += w[m]
+            k2[m] += w[m] * w[m]
+            for i in range(moments.shape[1]):
+                for j in range(moments.shape[2]):
+                    load[m, i, j] += w[m] * moments[s, i, j]
+
+
+@cached_njit
 def _ridge_kernel(b, c_re, c_im, a, group, keep, kg, v0, coarse, fine, p_fine, step, window):
     """For each front response r (rows of `c_re`, `c_im`, `a`, (R, F)): the coarse grid's best rear
     pressure, refined by the least-squares parabola through ℓ at the 9 fine points within ±`step`
@@ -693,13 +713,7 @@ class PreviewTrack:
                          rm.sprung_mass * loads[:, 3] + rm.unsprung_mass * loads[:, 1]], axis=1)  # fmt: skip
         moments = np.stack([np.full(load.shape[:2], float(load.shape[2])), load.sum(axis=2),
                             (load * load).sum(axis=2)], axis=2)  # (S, 2, 3)  # fmt: skip
-        for k in range(len(deltas)):
-            self.A += w[:, None] * axx[k][None, :]
-            self.B += w[:, None] * ayy[k][None, :]
-            self.C += w[:, None] * cxy[k][None, :]
-            self.K += w
-            self.K2 += w * w
-            self._load += w[:, None, None] * moments[k][None, :, :]
+        _add_segments(self.A, self.B, self.C, self.K, self.K2, self._load, w, axx, ayy, cxy, moments)
 
     def _detrend(self, x: np.ndarray) -> np.ndarray:
         """Each row of `x` (S, n) less its least-squares line (row by row: the same whatever S)."""

@@ -398,7 +398,8 @@ class RollingRadius:
             s.silent += np.sum(~reads & self._turning(w, reads)[:, None], axis=0)
         grounded = np.ones(t.size, dtype=bool)
         if load_share is not None:  # a wheel off the ground does not roll on its radius
-            grounded = ~np.any(load_share < self.config.min_load_share, axis=1)  # NaN < x is False
+            for c in range(n_c):  # wheel by wheel: numpy's any over the rows' four is 5 times slower
+                grounded &= ~(load_share[:, c] < self.config.min_load_share)  # NaN < x is False
         # the raw inputs: the excesses are taken per block, over the wheels read then (:meth:`_finish_block`)
         samples = np.column_stack([w, others[0], grounded, others[2], others[1], guessed])
         rows = []
@@ -484,8 +485,9 @@ class RollingRadius:
         e[~ok] = 0.0
         live = s.alive
         counted = int(ok.sum())
-        x = e.sum(axis=0) / max(counted, 1)
-        sd = np.sqrt(np.maximum((e**2).sum(axis=0) / max(counted, 1) - x**2, 0.0))
+        total, total_sq = _column_sums(e)
+        x = total / max(counted, 1)
+        sd = np.sqrt(np.maximum(total_sq / max(counted, 1) - x**2, 0.0))
         ax, ay = ax[np.isfinite(ax)], ay[np.isfinite(ay)]
         used = (
             counted >= cfg.min_valid_share * self.block and ax.size > 0 and ay.size > 0
@@ -552,9 +554,9 @@ class RollingRadius:
         where another turned is taken back; at least two wheels stay. Where the set changes, every
         wheel's memory starts afresh (an excess over other wheels is another quantity)."""
         s = self._s
-        reads = np.isfinite(w) & (w > 0.0)
-        if s.alive.all() and reads.all():  # every wheel read throughout: nothing to change
+        if s.alive.all() and _all_read(w):  # every wheel read throughout: nothing to change
             return
+        reads = np.isfinite(w) & (w > 0.0)
         turning = self._turning(w, reads)
         if turning.sum() < self.config.min_valid_share * self.block:
             return
@@ -713,3 +715,27 @@ def _sample_excess(w, psi, x, y, radius, min_speed, alive, out_e, out_ok):
         for c in range(n_c):
             if alive[c]:
                 out_e[k, c] = kin[c] - (delta_sum - kin[c]) / (m - 1)
+
+
+@cached_njit
+def _column_sums(e):
+    """Each column's sum and sum of squares of `e` (n, C), the rows added in order: what numpy's
+    ``e.sum(axis=0)`` and ``(e**2).sum(axis=0)`` give, bit for bit, without their passes over the block
+    in narrow rows (10 times the time)."""
+    total, total_sq = np.zeros(e.shape[1]), np.zeros(e.shape[1])
+    for k in range(e.shape[0]):
+        for c in range(e.shape[1]):
+            total[c] += e[k, c]
+            total_sq[c] += e[k, c] * e[k, c]
+    return total, total_sq
+
+
+@cached_njit
+def _all_read(w):
+    """Whether every wheel speed in `w` (n, C) is finite and positive (:meth:`RollingRadius._check_wheels`;
+    numpy's test takes a pass per operation)."""
+    for k in range(w.shape[0]):
+        for c in range(w.shape[1]):
+            if not (np.isfinite(w[k, c]) and w[k, c] > 0.0):
+                return False
+    return True

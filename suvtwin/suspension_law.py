@@ -219,6 +219,17 @@ def _force(q, s):
 
 
 @cached_njit
+def _damper(q, v):
+    """F_d(v): the digressive damper's force at compression velocity v (:func:`damper_force`)."""
+    c_lo, c_hi, r_lo, r_hi, knee = q[8], q[9], q[10], q[11], q[12]
+    a = abs(v)
+    over = max(a - knee, 0.0)
+    if v >= 0.0:
+        return c_lo * a - (c_lo - c_hi) * over
+    return -(r_lo * a - (r_lo - r_hi) * over)
+
+
+@cached_njit
 def _rate(q, s):
     """F_s'(s)."""
     k, prog, cb, b1, b2, cr, r1, r2 = q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7]
@@ -268,6 +279,8 @@ def _kernel(which, q, a, b, c, out0, out1):
             out0[i] = s
         elif which == 6:
             out0[i], out1[i] = _equivalent(q, a[i], max(b[i], _SIGMA_FLOOR), max(c[i], _SIGMA_FLOOR))
+        elif which == 8:
+            out0[i] = _damper(q, a[i])
         else:
             out0[i] = _pm(int(c[i]), a[i], b[i])
 
@@ -303,13 +316,9 @@ def spring_rate(s: npt.ArrayLike, law: SuspensionLaw) -> np.ndarray:
 
 
 def damper_force(v: npt.ArrayLike, law: SuspensionLaw) -> np.ndarray:
-    """Damper force, N (> 0 resists compression), at compression velocity `v` (m/s)."""
-    v = np.asarray(v, dtype=float)
-    a = np.abs(v)
-    knee = law.knee_velocity
-    comp = law.compression_low * a - (law.compression_low - law.compression_high) * np.maximum(a - knee, 0.0)
-    reb = law.rebound_low * a - (law.rebound_low - law.rebound_high) * np.maximum(a - knee, 0.0)
-    return np.where(v >= 0.0, comp, -reb)
+    """Damper force, N (> 0 resists compression), at compression velocity `v` (m/s): the low slopes
+    below the knee velocity, the high ones beyond it."""
+    return _apply(8, law.values, v)[0]
 
 
 def gaussian_spring_force(law: SuspensionLaw, mean: npt.ArrayLike, sigma: npt.ArrayLike) -> np.ndarray:
