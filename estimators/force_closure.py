@@ -54,13 +54,15 @@ its six moments per frequency (:func:`window_moments`) and J on any grid follows
 (:func:`objective_from_moments`; compiled, :func:`objective_on_grid`; the noise's weights made once per
 grid by :func:`closure_weights`).
 The stream takes the four corners' samples in time order and analyses each window once the stream
-holds ``margin_s`` beyond it, from its own span (the window, its front's delay and a margin each
-side, tapered), so a window's moments do not depend on how the stream was cut; at 200 Hz (the
-spectrum cut there first). On the first 30 ``constant`` runs fed from the start in 2 s blocks, the
-damper's timing half the simulator's step: −0.9 ± 7.1 kPa at 10 s, +0.1 ± 3.0 at 20 s, +0.5 ± 2.2 at
-30 s (80 of 120 tyres: classes A–C); cost 0.39–0.57 ms per second of four-corner data fed in 4 s
-blocks, the monitor's (0.75–0.85 before the spans' samples, forces and moments were taken in compiled
-passes: alternated on one core of the 2-core machine, 2026-12-05). The online
+holds ``margin_s`` beyond it, from a span (the windows ready, their fronts' delay and a margin each
+side, tapered; on a fixed lattice instead, ``spans="lattice"``, a window's moments do not depend on
+how the stream was cut; the online monitor feeds fixed 4 s blocks, so its estimates do not either);
+at 200 Hz (the spectrum cut there first). With 4 s windows, two a lattice span, on the first 30
+``constant`` runs fed from the start in 2 s blocks, the damper's timing half the simulator's step:
+−0.9 ± 7.1 kPa at 10 s, +0.1 ± 3.0 at 20 s, +0.5 ± 2.2 at 30 s (80 of 120 tyres: classes A–C);
+cost 0.39–0.57 ms per second of four-corner data fed in 4 s blocks, the monitor's (0.75–0.85 before
+the spans' samples, forces and moments were taken in compiled passes: alternated on one core of the
+2-core machine, 2026-12-05; with 0.5 s windows, 16 a ready span, about 0.6 ms). The online
 monitor (:mod:`suvtwin.estimators.monitor`) takes each update's windows as a likelihood of the two
 tyres' pressures and adds a model-error floor to its σ.
 
@@ -467,12 +469,21 @@ class ClosureConfig:
     band_hz : the relation's frequencies; highpass_hz : the integrals' lower limit (:func:`integrate`);
     min_load_share : the share of the static load below which a wheel is taken off the road;
     damper_lag_s : the damper's timing (:func:`corner_signals`); min_speed_mps : slower windows
-    are not used (the delay grows past the margin); max_speed_change : a window whose speed spans more
-    than this share of its mean is not used (one delay per window); analysis_rate_hz : the rate the
-    integrals and moments run at; span_windows : windows analysed from one span (one integration over
-    them, their delays and the margins: fewer spans cost less, a longer group waits longer for its
-    last window; with 0.5 s windows 4 cost 4.7 ms per second of four-corner data in the monitor where
-    2 cost 6.3, 8 4.0, at alike accuracy).
+    are not used (the delay grows past the margin); max_speed_change_per_s : a window whose speed, over
+    the window and the largest delay before it, spans more than this share of its mean per second of
+    that span is not used (one delay per window; under braking or acceleration the delay drifts
+    within the window and the load moves between the axles: on ``nominal_long`` a braking from 115
+    to 33 km/h at 1.2 m/s² read all four tyres 30–73 kPa low and warned them with a share of 0.1
+    per window, which passed most 0.5 s windows; 0.022 per s is the share 4 s windows had);
+    analysis_rate_hz : the rate the integrals and moments run at; spans, span_windows : which windows
+    share one span (one integration over them, their delays and the margins): ``ready``, those ready
+    at one :meth:`ClosureStream.add`, at most span_windows of them (the monitor feeds its 4 s update
+    blocks: 16 windows of 0.5 s a span); ``lattice``, groups of span_windows on a fixed lattice, so a
+    window's moments do not depend on how the stream is cut, but a group waits for its last window.
+    With 0.5 s windows in the monitor (scratch timing on one core of the 2-core machine): lattice
+    groups of 2, 4 and 8 cost 6.3, 4.7 and 4.0 ms per second of four-corner data before the stream's
+    loops were compiled; after, lattice 4 3.3 and ready 16 2.7 (2.0–2.2 without the closure), at
+    alike accuracy (``constant`` with the radii ± 6.56 / 3.62 and ± 6.43 / 3.27 kPa at 10 / 30 s).
     """
 
     window_s: float = 0.5
@@ -482,9 +493,10 @@ class ClosureConfig:
     min_load_share: float = 0.1
     damper_lag_s: float = 0.0
     min_speed_mps: float = 5.0
-    max_speed_change: float = 0.1
+    max_speed_change_per_s: float = 0.022
     analysis_rate_hz: float = 200.0
-    span_windows: int = 4
+    span_windows: int = 16
+    spans: str = "ready"
 
     def __post_init__(self) -> None:
         checks = [
@@ -495,8 +507,9 @@ class ClosureConfig:
             ("min_load_share", 0.0 <= self.min_load_share < 1.0, "0–1"),
             ("damper_lag_s", 0.0 <= self.damper_lag_s <= 0.01, "0–0.01 s"),
             ("min_speed_mps", 0.5 <= self.min_speed_mps <= 50.0, "0.5–50 m/s"),
-            ("max_speed_change", 0.0 < self.max_speed_change <= 1.0, "0–1"),
-            ("span_windows", isinstance(self.span_windows, int) and 1 <= self.span_windows <= 16, "1–16"),
+            ("max_speed_change_per_s", 0.0 < self.max_speed_change_per_s <= 1.0, "0–1 per s"),
+            ("span_windows", isinstance(self.span_windows, int) and 1 <= self.span_windows <= 64, "1–64"),
+            ("spans", self.spans in ("ready", "lattice"), "'ready' or 'lattice'"),
             ("analysis_rate_hz", self.analysis_rate_hz >= 2.0 * self.band_hz[1],
              "at least twice band_hz's top"),
         ]
@@ -523,7 +536,8 @@ class ClosureStream:
     corner's anti-roll partner the same place on the other track (so two tracks); `wheelbase_m` the
     front-to-rear distance; `dt` the sampling interval, s. Windows start every half window on the
     stream's sample count; a window is analysed once the stream holds ``margin_s`` beyond it, from a
-    buffer of the window, its front's delay and the margins, all four corners' samples valid
+    span (:class:`ClosureConfig`'s ``spans``) of the windows, their fronts' delay and the margins,
+    all four corners' samples valid
     (:meth:`add`'s `valid`); an invalid sample restarts the buffer after it. The state is that buffer:
     bounded by the window, the margins, the largest delay and the longest block given.
     """
@@ -603,8 +617,12 @@ class ClosureStream:
             self._next = -(-earliest // half) * half
         group = cfg.span_windows * half  # the windows of a group share one span
         while True:
-            last = (self._next // group) * group + group - half  # the group's last start
-            if last + self.m + self.margin > end:
+            if cfg.spans == "lattice":
+                last = (self._next // group) * group + group - half  # the group's last start
+            else:  # the windows ready now, at most span_windows of them
+                ready = (end - self.m - self.margin) // half * half
+                last = min(ready, self._next + group - half)
+            if last < self._next or last + self.m + self.margin > end:
                 break
             self._analyse(list(range(self._next, last + 1, half)), moments, windows, skipped)
             self._next = last + half
@@ -615,9 +633,8 @@ class ClosureStream:
         return ClosureBlock(moments, windows, skipped)
 
     def _analyse(self, starts, moments, windows, skipped) -> None:
-        """The moments of the windows starting at `starts` (a group on the fixed lattice) from one
-        span: their delayed fronts and the margins, so what a window gives does not depend on how
-        the stream was cut into blocks."""
+        """The moments of the windows starting at `starts` (a group: those ready, or a group on the fixed
+        lattice) from one span: their delayed fronts and the margins."""
         cfg = self.config
         corners = sorted({c for pair in self.tracks for c in pair})
         row = {c: i for i, c in enumerate(corners)}
@@ -638,7 +655,8 @@ class ClosureStream:
             at = start - self._first - lo  # the rear window's first sample in the span
             speed = self._v[lo + at - self.max_shift : lo + at + self.m]
             mean = float(speed.mean())
-            if mean < cfg.min_speed_mps or np.ptp(speed) > cfg.max_speed_change * mean:
+            span_s = speed.size * self.dt
+            if mean < cfg.min_speed_mps or np.ptp(speed) > cfg.max_speed_change_per_s * mean * span_s:
                 skipped += 1
                 continue
             kept.append(at // q)

@@ -232,7 +232,7 @@ def test_decimated_integrals_are_the_full_rate_ones_in_band():
                                    atol=2e-3 * np.abs(a).max())  # fmt: skip
 
 
-def _stream_feed(track, chunks, noise=0.05, seed=3, nan_at=None, speed=None):
+def _stream_feed(track, chunks, noise=0.05, seed=3, nan_at=None, speed=None, config=None):
     """Two tracks of the lsim cars (the second the first's cars again) fed to a ClosureStream in
     chunks of the given sizes (repeated); the summed moments per track and the stream."""
     rng = np.random.default_rng(seed)
@@ -244,7 +244,7 @@ def _stream_feed(track, chunks, noise=0.05, seed=3, nan_at=None, speed=None):
         a_u[nan_at, 0] = np.nan
     parts = [_parts(**track[key]) for key in ("front", "front", "rear", "rear")]
     wheelbase = 20.0 * track["delay"]
-    stream = ClosureStream(parts, ((0, 2), (1, 3)), wheelbase, DT)
+    stream = ClosureStream(parts, ((0, 2), (1, 3)), wheelbase, DT, config)
     v = np.full(track["n"], 20.0) if speed is None else speed
     total, windows, skipped, i, k = 0.0, 0, 0, 0, 0
     while i < track["n"]:
@@ -259,14 +259,25 @@ def _stream_feed(track, chunks, noise=0.05, seed=3, nan_at=None, speed=None):
 def test_the_stream_closes_both_tyres_whatever_its_chunks(track):
     grid = np.linspace(150e3, 300e3, 301)
     stream, total, windows, skipped = _stream_feed(track, [4000])
+    lattice = ClosureConfig(spans="lattice", span_windows=4)
+    _, fixed, fixed_windows, _ = _stream_feed(track, [4000], config=lattice)
+    _, fixed2, fixed_windows2, _ = _stream_feed(track, [777, 2500, 13], config=lattice)
+    # on the lattice, the same windows from the same spans whatever the chunks: the same moments
+    np.testing.assert_array_equal(fixed_windows, fixed_windows2)
+    np.testing.assert_allclose(fixed2, fixed, rtol=1e-9, atol=1e-12 * np.abs(fixed).max())
+    # the windows ready at each call share a span (the default): the same windows whatever the chunks,
+    # their moments from other spans (the integrals' drift near a span's tapered ends differs: J's floor
+    # here 4.2e3 with 4 s chunks, 5.8e3 with the small ones), J's minimum at the same stiffnesses
     _, total2, windows2, _ = _stream_feed(track, [777, 2500, 13])
-    # the same windows from the same buffers whatever the chunks: the same moments
     np.testing.assert_array_equal(windows, windows2)
-    np.testing.assert_allclose(total2, total, rtol=1e-9, atol=1e-12 * np.abs(total).max())
-    # 24 s: windows every 2 s once the first has its margin and delay behind it
-    assert windows[0] >= 9 and skipped[0] == 0
+    assert np.all(fixed_windows <= windows) and np.all(fixed_windows >= windows - 4)  # the lattice waits
     w = stream.weights(0, 2, grid, grid, tyre_damping=200.0, noise_sigma=0.05)
-    j = objective_from_moments(total[0], weights=w)
+    j1, j2 = objective_from_moments(total[0], weights=w), objective_from_moments(total2[0], weights=w)
+    assert np.unravel_index(np.argmin(j2), j2.shape) == np.unravel_index(np.argmin(j1), j1.shape)
+    assert j1.min() <= j2.min() < 1.5 * j1.min()
+    # 24 s: windows every quarter second once the first has its margin and delay behind it
+    assert windows[0] >= 80 and skipped[0] == 0
+    j = j1
     best = np.unravel_index(np.argmin(j), j.shape)
     assert grid[best[0]] == pytest.approx(235_000.0, rel=0.015)
     assert grid[best[1]] == pytest.approx(198_000.0, rel=0.015)
