@@ -68,7 +68,8 @@ tyres' pressures and adds a model-error floor to its σ.
 
 Short windows read better (:class:`ClosureConfig`'s ``window_s``, 0.5 s since the eighteenth
 session): in the monitor on the 100 ``constant`` runs, with the radii, 4 s windows read the tyres
-+1.9 ± 10.8 kPa at 10 s and ± 6.2 at 30 s, 2 s ± 10.1 / 5.7, 1 s ± 8.1 / 5.1, 0.5 s ± 6.6 / 3.6,
++1.9 ± 10.8 kPa at 10 s and ± 6.2 at 30 s, 2 s ± 10.1 / 5.7, 1 s ± 8.1 / 5.1, 0.5 s ± 6.6 / 3.6
+(four to a lattice span; ± 6.4 / 3.3 with those ready at each update sharing one, the default),
 0.25 s −1.5 ± 12.8 / −3.4 ± 6.2 (class A's tyres ± 14 kPa at 30 s: a 4 Hz bin spacing leaves the
 relation four frequencies). More short windows are clear of the stops and of lift-off on rough roads
 (class D's tyres, the monitor's own output at 30 s, ± 14.2 → ± 8.7 kPa; class C ± 4.1 → 2.7), the

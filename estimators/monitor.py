@@ -147,7 +147,7 @@ rectangular, linear detrend; above ``merge_above_hz`` the periodogram is average
    lift-off, enter each tyre's posterior as a likelihood (:meth:`TyreMonitor._correct_closure`);
    the output adds its model-error floor (``closure_floor_kpa``). On the 100 ``constant`` runs
    (with the radii) it took the error from ± 15.0 / 10.1 kPa at 10 / 30 s to ± 10.8 / 6.2 with
-   4 s windows, to ± 6.6 / 3.6 with 0.5 s windows (the default); class D's wheels reach the stops
+   4 s windows, to ± 6.4 / 3.3 with 0.5 s windows (the default); class D's wheels reach the stops
    often, so fewer of its windows are clear (docs/monitor.md).
 
 Everything uses data up to t only (the speed included): the estimate at t from a record cut
