@@ -156,56 +156,26 @@ def test_bad_inputs_name_the_problem():
         closure_objective(s, s, delay_s=0.1, dt=DT, stiffness_grid=[1e5])
 
 
-def test_the_moments_give_the_objective_of_the_windows_residuals(track):
-    # J from the summed moments against J summed window by window from each window's residual
-    rng = np.random.default_rng(5)
+def _noisy_signals(track, seed):
+    """The front and rear corners' signals from the lsim cars' accelerations, 0.05 m/s² noise on the
+    wheels'."""
+    rng = np.random.default_rng(seed)
     zeros = np.zeros(track["n"])
-    f, r = (corner_signals(w + 0.05 * rng.standard_normal(w.size), b, zeros, zeros, _parts(**track[key]),
-                           dt=DT)
-            for key, (b, w) in (("front", track["acc_f"]), ("rear", track["acc_r"])))  # fmt: skip
-    grid = np.array([180e3, 200e3, 235e3, 260e3])
-    fit = closure_objective(f, r, delay_s=track["delay"], dt=DT, stiffness_grid=grid, noise_sigma=0.05)
-    m = 4000
-    freq = np.fft.rfftfreq(m, DT)
-    band = (freq > 0.5) & (freq < 20.0)
-    omega = 2 * np.pi * freq[band]
-    shift = int(round(track["delay"] / DT))
-    phase = np.exp(-1j * omega * (track["delay"] - shift * DT))
-    x_f, x_r, inv_var = closure_weights(f.parts, r.parts, grid, grid, m=m, dt=DT, noise_sigma=0.05)
-    direct = np.zeros((grid.size, grid.size))
-    for start in range(shift, track["n"] - m + 1, m // 2):
-        rr, ff = slice(start, start + m), slice(start - shift, start - shift + m)
-        hann = np.hanning(m)
-        dft = [np.fft.rfft((x - x @ hann / hann.sum()) * hann)[band]
-               for x in (r.z_u[rr], r.force[rr], f.z_u[ff], f.force[ff])]  # fmt: skip
-        for i in range(grid.size):
-            for j in range(grid.size):
-                res = dft[0] + x_r[j] * dft[1] - phase * (dft[2] + x_f[i] * dft[3])
-                direct[i, j] += np.sum(np.abs(res) ** 2 * inv_var[i, j])
-    np.testing.assert_allclose(fit.objective, direct, rtol=1e-9)
+    return tuple(corner_signals(w + 0.05 * rng.standard_normal(w.size), b, zeros, zeros, _parts(**track[key]),
+                                dt=DT)
+                 for key, (b, w) in (("front", track["acc_f"]), ("rear", track["acc_r"])))  # fmt: skip
 
 
-def test_windows_of_their_own_delays_give_the_objective_of_their_residuals(track):
-    # the stream's form: windows of one pass, each its own delay (whole samples a shift, the rest a
-    # phase), against J summed window by window from each window's residual at its delay
-    rng = np.random.default_rng(7)
-    zeros = np.zeros(track["n"])
-    f, r = (corner_signals(w + 0.05 * rng.standard_normal(w.size), b, zeros, zeros, _parts(**track[key]),
-                           dt=DT)
-            for key, (b, w) in (("front", track["acc_f"]), ("rear", track["acc_r"])))  # fmt: skip
-    grid = np.array([180e3, 235e3, 260e3])
-    m = 500
-    delays = np.array([0.1413, 0.1389, 0.14462, 0.1413])
-    rear_at = np.array([1000, 3000, 5250, 9000])
-    shift = np.rint(delays / DT).astype(int)
-    moments, used = windows_moments([f, f], [r, r], rear_at, rear_at - shift, delays - shift * DT, m, dt=DT)
-    assert used.tolist() == [4, 4]
-    x_f, x_r, inv_var = closure_weights(f.parts, r.parts, grid, grid, m=m, dt=DT, noise_sigma=0.05)
+def _direct_objective(f, r, grid, m, windows):
+    """J on `grid` (both tyres) summed window by window from each window's residual: `windows` the
+    (rear's first sample, delay s) pairs, `m` samples each, the delay's whole samples a shift and the
+    rest a phase; the noise weights of :func:`closure_weights`."""
     freq = np.fft.rfftfreq(m, DT)
     band = (freq > 0.5) & (freq < 20.0)
+    x_f, x_r, inv_var = closure_weights(f.parts, r.parts, grid, grid, m=m, dt=DT, noise_sigma=0.05)
     hann = np.hanning(m)
     direct = np.zeros((grid.size, grid.size))
-    for at, delay in zip(rear_at, delays, strict=True):
+    for at, delay in windows:
         back = int(round(delay / DT))
         phase = np.exp(-1j * 2 * np.pi * freq[band] * (delay - back * DT))
         rr, ff = slice(at, at + m), slice(at - back, at - back + m)
@@ -215,9 +185,34 @@ def test_windows_of_their_own_delays_give_the_objective_of_their_residuals(track
             for j in range(grid.size):
                 res = dft[0] + x_r[j] * dft[1] - phase * (dft[2] + x_f[i] * dft[3])
                 direct[i, j] += np.sum(np.abs(res) ** 2 * inv_var[i, j])
+    return direct, (x_f, x_r, inv_var)
+
+
+def test_the_moments_give_the_objective_of_the_windows_residuals(track):
+    # J from the summed moments against J summed window by window from each window's residual
+    f, r = _noisy_signals(track, 5)
+    grid = np.array([180e3, 200e3, 235e3, 260e3])
+    fit = closure_objective(f, r, delay_s=track["delay"], dt=DT, stiffness_grid=grid, noise_sigma=0.05)
+    m, shift = 4000, int(round(track["delay"] / DT))
+    direct, _ = _direct_objective(f, r, grid, m, [(at, track["delay"])
+                                                  for at in range(shift, track["n"] - m + 1, m // 2)])
+    np.testing.assert_allclose(fit.objective, direct, rtol=1e-9)
+
+
+def test_windows_of_their_own_delays_give_the_objective_of_their_residuals(track):
+    # the stream's form: windows of one pass, each its own delay (whole samples a shift, the rest a
+    # phase), against J summed window by window from each window's residual at its delay
+    f, r = _noisy_signals(track, 7)
+    grid = np.array([180e3, 235e3, 260e3])
+    m = 500
+    delays = np.array([0.1413, 0.1389, 0.14462, 0.1413])
+    rear_at = np.array([1000, 3000, 5250, 9000])
+    shift = np.rint(delays / DT).astype(int)
+    moments, used = windows_moments([f, f], [r, r], rear_at, rear_at - shift, delays - shift * DT, m, dt=DT)
+    assert used.tolist() == [4, 4]
+    direct, weights = _direct_objective(f, r, grid, m, list(zip(rear_at, delays, strict=True)))
     for k in range(2):
-        j = objective_from_moments(moments[k], weights=(x_f, x_r, inv_var))
-        np.testing.assert_allclose(j, direct, rtol=1e-9)
+        np.testing.assert_allclose(objective_from_moments(moments[k], weights=weights), direct, rtol=1e-9)
 
 
 def test_decimated_integrals_are_the_full_rate_ones_in_band():
