@@ -72,10 +72,11 @@ session): in the monitor on the 100 ``constant`` runs, with the radii, 4 s windo
 (four to a lattice span; ± 6.4 / 3.3 with those ready at each update sharing one, the default),
 0.25 s −1.5 ± 12.8 / −3.4 ± 6.2 (class A's tyres ± 14 kPa at 30 s: a 4 Hz bin spacing leaves the
 relation four frequencies). More short windows are clear of the stops and of lift-off on rough roads
-(class D's tyres, the monitor's own output at 30 s, ± 14.2 → ± 8.7 kPa; class C ± 4.1 → 2.7), the
-relation's sub-hertz model error (the integrals' drift, the spring's operating point) falls below
-the lowest bin (2 Hz), and a window's one delay fits a changing speed better. Not the band alone:
-4 s windows with the band from 2 Hz read as with it from 0.5 Hz (± 10.8 / 6.2).
+(class D's tyres, the monitor's own output at 30 s, ± 14.2 → ± 9.3 kPa with the default; class C
+± 4.1 → 2.7), and the relation's sub-hertz model error (the integrals' drift, the spring's operating
+point) falls below the lowest bin (2 Hz). Not the band alone: 4 s windows with the band from 2 Hz
+read as with it from 0.5 Hz (± 10.8 / 6.2). A short window lets more of a speed change through the
+speed check unless it is per second (``max_speed_change_per_s``).
 
 No MuJoCo here: the functions consume arrays.
 """
@@ -119,7 +120,6 @@ class CornerParts:
     anti_roll: float
     static_travel: float
     static_load: float
-
 
 
 @dataclass(frozen=True)
