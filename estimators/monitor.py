@@ -145,10 +145,12 @@ rectangular, linear detrend; above ``merge_above_hz`` the periodogram is average
    stiffness, so the two tyres' stiffnesses close a relation that holds no road spectrum
    (:mod:`suvtwin.estimators.force_closure`). Its windows, clear of the suspension's stops and of
    lift-off, enter each tyre's posterior as a likelihood (:meth:`TyreMonitor._correct_closure`);
-   the output adds its model-error floor (``closure_floor_kpa``). On the 100 ``constant`` runs
-   (with the radii) it took the error from ± 15.0 / 10.1 kPa at 10 / 30 s to ± 10.8 / 6.2 with
-   4 s windows, to ± 6.4 / 3.3 with 0.5 s windows (the default); class D's wheels reach the stops
-   often, so fewer of its windows are clear (docs/monitor.md).
+   tempered by ``closure_tempering`` (each update's windows share an error their number does not
+   shrink), and the output adds its model-error floor (``closure_floor_kpa``). On the 100
+   ``constant`` runs (with the radii) it took the error from ± 15.0 / 10.1 kPa at 10 / 30 s to
+   ± 10.8 / 6.2 with 4 s windows, to ± 6.4 / 3.3 with 0.5 s windows, to ± 6.4 / 3.0 tempered (the
+   default); class D's wheels reach the stops often, so fewer of its windows are clear
+   (docs/monitor.md).
 
 Everything uses data up to t only (the speed included): the estimate at t from a record cut
 at t is the estimate at t from the whole record.
@@ -418,6 +420,18 @@ class MonitorConfig:
     closure_memory_s : float
         Forgetting time constant of the closure's information counted toward that floor, s (it
         starts afresh when the tyre's pressure is changing).
+    closure_tempering : float
+        κ ≥ 1: each update's closure log-likelihood is divided by it (a tempered, or power,
+        likelihood: its variance κ times the quasi-likelihood's). The windows of one update share
+        errors the quasi-likelihood counts as independent: one span of integration, and 2–4 s of
+        one road. Their scores scatter as the curvature of J says (a sandwich estimate from the
+        windows' scores, lag one included, moved the RMS of the z-scores by 5 % at most), yet one
+        update's closure estimate alone, from a flat prior, missed the truth by 1.42 σ RMS at the
+        first update of the first 40 ``constant`` runs, and by 1.69 σ on the 20 ``low_speed`` runs:
+        κ = 2. With it, on the 100 ``constant`` runs the monitor's own output read ± 10.35 / 5.66 kPa
+        at 10 / 30 s and ±2σ held 99.1 % (κ = 1: ± 10.26 / 6.02, 97.6 %; κ = 3: ± 10.48 / 5.69,
+        99.6 %), 3 of 4000 updates beyond 3σ (16 with κ = 1); ``low_speed`` with the radii none of
+        560 beyond 3σ (2 with κ = 1).
     max_nonlinear_share : float
         A window whose travel (Gaussian, as linearized) reaches the bump or rebound stop, or whose
         wheel leaves the ground, more than this share of the time is not used for k_t (``rough``).
@@ -489,6 +503,7 @@ class MonitorConfig:
     force_closure: bool = True
     closure_floor_kpa: float = 3.0
     closure_memory_s: float = 60.0
+    closure_tempering: float = 2.0
 
     def __post_init__(self) -> None:
         checks = [
@@ -546,6 +561,9 @@ class MonitorConfig:
             ("max_nonlinear_share", 0 < self.max_nonlinear_share <= 1, "(0, 1]"),
             ("nonlinear_taper_from", 0 <= self.nonlinear_taper_from <= self.max_nonlinear_share,
              "0–max_nonlinear_share"),
+            ("closure_floor_kpa", 0 <= self.closure_floor_kpa <= 100.0, "0–100 kPa"),
+            ("closure_memory_s", self.update_s <= self.closure_memory_s <= 1e6, "update_s–1e6 s"),
+            ("closure_tempering", 1.0 <= self.closure_tempering <= 100.0, "1–100"),
         ]
         for name, ok, allowed in checks:
             if not ok:
@@ -1827,9 +1845,10 @@ class TyreMonitor:
         0.5 s windows read the tyres 66–68 kPa and warned.
 
         Per track, J over the two tyres' coarse pressure grids from the windows' moments, scaled as a
-        quasi-likelihood: :math:`\ell = -(J - J_{min}) / (2 s)`, s = J_min over its degrees of freedom
+        quasi-likelihood: :math:`\ell = -(J - J_{min}) / (2 κ s)`, s = J_min over its degrees of freedom
         (2 per frequency and window over 1.5, the Hann window's bins' overlap: the model's error, not
-        the sensors' noise, sets the residual's level). Each tyre's posterior is
+        the sensors' noise, sets the residual's level), κ ``closure_tempering`` (the windows' shared
+        error, :class:`MonitorConfig`). Each tyre's posterior is
         then multiplied by exp(ℓ) summed over the other tyre's pressure grid (its marginal likelihood,
         the other's pressure uniform), spline-interpolated from the coarse grid as the windows'
         likelihoods are. Not over the other's current posterior (the exact update of the pair's
@@ -1867,7 +1886,7 @@ class TyreMonitor:
             j = objective_on_grid(found.moments[i], self._closure_weights[i])
             j_min = float(j.min())
             dof = 2.0 * found.moments.shape[-1] * found.windows[i] / 1.5
-            ll = -(j - j_min) / (2.0 * max(j_min / dof, 1e-12))
+            ll = -(j - j_min) / (2.0 * cfg.closure_tempering * max(j_min / dof, 1e-12))
             marg = post[[f, r]].sum(axis=(1, 2, 3))  # (2, P) the two tyres' marginals
             marg /= marg.sum(axis=1, keepdims=True)
             # the log-likelihood of each coarse pressure of one tyre, the other's summed out (fine grid)

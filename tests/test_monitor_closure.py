@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 import scipy.signal
 
+from suvtwin.errors import InputError
 from suvtwin.estimators.joint import LinearQuarterCar
 from suvtwin.estimators.monitor import MonitorConfig, MonitorUpdate, TyreMonitor
 from suvtwin.estimators.quarter_car import stiffness_from_pressure
@@ -119,3 +120,19 @@ def test_a_disconnected_wheel_accelerometer_keeps_the_closure_out(drive):
     # the other track keeps the estimate its spectra give, within 3σ
     error = out.pressure_pa[-1, [0, 2]] / 1e3 - np.array(PRESSURES_KPA)[[0, 2]]
     assert np.all(np.abs(error) <= 3.0 * out.pressure_sigma_pa[-1, [0, 2]] / 1e3), error
+
+
+def test_tempering_divides_the_closures_information(drive):
+    # a power likelihood ℓ/κ: for a Gaussian likelihood its precision is 1/κ times, whatever the prior
+    # it meets (each update adds 1/σ²_after − 1/σ²_before = the likelihood's precision), so the
+    # information the closure gave each tyre over the drive scales by 1/κ
+    plain, _ = _run(drive, closure_tempering=1.0)
+    tempered, _ = _run(drive, closure_tempering=4.0)
+    ratio = tempered._state.closure_info / plain._state.closure_info
+    # within 15 %: the pressure grid's posteriors are near-Gaussian, not Gaussian (0.88–0.99 × 1/4 here)
+    assert np.all(np.abs(4.0 * ratio - 1.0) <= 0.15), ratio
+
+
+def test_tempering_below_one_is_refused():
+    with pytest.raises(InputError, match="closure_tempering"):
+        MonitorConfig(closure_tempering=0.5)
