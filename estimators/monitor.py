@@ -425,7 +425,7 @@ class MonitorConfig:
         likelihood: its variance κ times the quasi-likelihood's). The windows of one update share
         errors the quasi-likelihood counts as independent: one span of integration, and 2–4 s of
         one road. Their scores scatter as the curvature of J says (a sandwich estimate from the
-        windows' scores, lag one included, moved the RMS of the z-scores by 5 % at most), yet one
+        windows' scores, lag one included, moved the RMS of the z-scores by 10 % at most), yet one
         update's closure estimate alone, from a flat prior, missed the truth by 1.42 σ RMS at the
         first update of the first 40 ``constant`` runs, and by 1.69 σ on the 20 ``low_speed`` runs:
         κ = 2. With it, on the 100 ``constant`` runs the monitor's own output read ± 10.35 / 5.66 kPa
