@@ -495,19 +495,18 @@ def _row_band_means(a_sq, cross, a1, b1, gamma_f, cos_f, sin_f, band_start, r, r
     """means[k] = mean over band k's frequencies j of a_sq[r, j] + 2 Re(cross[r, j] e^{iφ_j}),
     e^{iφ} = cos_f + i sin_f, plus gamma_f[j] (a1[r, j] + 2 Re(b1[r, j] e^{iφ_j})) where `gamma_f` (F,)
     is not empty (the tracks' cross term, γ per frequency); `row` (F,) is scratch. The row's gain is
-    taken over all frequencies in one straight loop (which the compiler vectorizes), then averaged
-    per band: 1.3 times faster than summing band by band, the same sums."""
+    taken over all frequencies in one straight loop (which the compiler vectorizes), the cross term
+    added where γ ≠ 0 (elsewhere it adds 0: independent tracks' coherence is 0 in most bands, and
+    their tables are not read), then averaged per band: 1.3 times faster than summing band by band,
+    the same sums."""
     n_k, n_f = band_start.size, a_sq.shape[1]
-    if gamma_f.size == 0:
-        for j in range(n_f):
-            b = cross[r, j]
-            row[j] = a_sq[r, j] + 2.0 * (b.real * cos_f[j] - b.imag * sin_f[j])
-    else:
-        for j in range(n_f):
-            c, s = cos_f[j], sin_f[j]
-            b, e = cross[r, j], b1[r, j]
-            row[j] = (a_sq[r, j] + 2.0 * (b.real * c - b.imag * s)
-                      + gamma_f[j] * (a1[r, j] + 2.0 * (e.real * c - e.imag * s)))  # fmt: skip
+    for j in range(n_f):
+        b = cross[r, j]
+        row[j] = a_sq[r, j] + 2.0 * (b.real * cos_f[j] - b.imag * sin_f[j])
+    for j in range(gamma_f.size):
+        if gamma_f[j] != 0.0:
+            e = b1[r, j]
+            row[j] += gamma_f[j] * (a1[r, j] + 2.0 * (e.real * cos_f[j] - e.imag * sin_f[j]))
     for k in range(n_k):
         j1 = band_start[k + 1] if k + 1 < n_k else n_f
         acc = 0.0

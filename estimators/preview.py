@@ -405,6 +405,44 @@ def _add_segments(a, b, c, k, k2, load, w, axx, ayy, cxy, moments):
 
 
 @cached_njit
+def _detrended(x, ramp, ramp_norm):
+    """Each row of `x` (S, n) less its least-squares line: its mean and its slope on `ramp` (n,), the
+    centred sample index, whose Σ ramp² is `ramp_norm` (:meth:`PreviewTrack._accumulate`; compiled, one
+    pass for the sums and one for the result)."""
+    out = np.empty(x.shape)
+    n = x.shape[1]
+    for s in range(x.shape[0]):
+        total = moment = 0.0
+        for i in range(n):
+            total += x[s, i]
+            moment += x[s, i] * ramp[i]
+        mean, slope = total / n, moment / ramp_norm
+        for i in range(n):
+            out[s, i] = x[s, i] - mean - ramp[i] * slope
+    return out
+
+
+@cached_njit
+def _load_moments(unsprung_front, unsprung_rear, sprung_front, sprung_rear, masses):
+    """Per segment (rows of the accelerations (S, n), m/s²) and tyre (front, rear): the sample count,
+    Σ F and Σ F² of its dynamic load F = m_s a_s + m_us a_us (N), `masses` the front's m_s and m_us
+    then the rear's (kg): (S, 2, 3) (:meth:`PreviewTrack.dlc`'s statistics)."""
+    n_s, n = unsprung_front.shape
+    out = np.empty((n_s, 2, 3))
+    for s in range(n_s):
+        for t in range(2):
+            sprung = sprung_front if t == 0 else sprung_rear
+            unsprung = unsprung_front if t == 0 else unsprung_rear
+            total = square = 0.0
+            for i in range(n):
+                f = masses[2 * t] * sprung[s, i] + masses[2 * t + 1] * unsprung[s, i]
+                total += f
+                square += f * f
+            out[s, t, 0], out[s, t, 1], out[s, t, 2] = float(n), total, square
+    return out
+
+
+@cached_njit
 def _ridge_kernel(b, c_re, c_im, a, group, keep, kg, v0, coarse, fine, p_fine, step, window):
     """For each front response r (rows of `c_re`, `c_im`, `a`, (R, F)): the coarse grid's best rear
     pressure, refined by the least-squares parabola through ℓ at the 9 fine points within ±`step`
@@ -659,7 +697,11 @@ class PreviewTrack:
         self._seen += xf.size
         front = np.concatenate([self._front, xf])  # ends at global index self._seen
         front_start = self._seen - front.size
-        pending = np.concatenate([self._pending, np.stack([xr, v, sf, sr, xf])], axis=1)
+        held = self._pending.shape[1]
+        pending = np.empty((5, held + xf.size))  # the held samples, then the chunk's
+        pending[:, :held] = self._pending
+        for row, x in enumerate((xr, v, sf, sr, xf)):
+            pending[row, held:] = x
         seg0 = start - self._pending.shape[1]  # global index of the pending segment's first sample
         n = self.n
         n_seg = pending.shape[1] // n
@@ -684,8 +726,8 @@ class PreviewTrack:
         self.counts["gap"] += int(np.sum(ready & ~sound))
         self.counts["used"] += int(np.sum(sound))
         if np.any(sound):
-            self._accumulate(seg_f[sound], blocks[0, sound], (tau - m * self.dt)[sound],
-                             blocks[[4, 0, 2, 3]][:, sound].transpose(1, 0, 2), w)  # fmt: skip
+            used = blocks if sound.all() else blocks[:, sound]
+            self._accumulate(seg_f[sound], used, (tau - m * self.dt)[sound], w)
         self._pending = pending[:, n_seg * n :].copy()
         self._front = front[-self._history :].copy()
         return int(np.sum(sound))
@@ -697,28 +739,21 @@ class PreviewTrack:
             raise InputError(f"{name} must be a 1-D array of {want}, got shape {a.shape}")
         return a
 
-    def _accumulate(self, fronts, rears, deltas, loads, w) -> None:
-        """Add S segment pairs (S, n) with fractional delays (S,) s; `loads` (S, 4, n): unsprung front,
-        unsprung rear, sprung front, sprung rear. Every row is transformed on its own and the sums
-        are taken one segment at a time, so they are the same, bit for bit, however the samples
-        were chunked."""
+    def _accumulate(self, fronts, blocks, deltas, w) -> None:
+        """Add S segment pairs: the fronts' (S, n) delayed by the fractional delays `deltas` (S,) s and the
+        rears' rows of `blocks` (5, S, n) (:meth:`add`'s: unsprung rear, speed, sprung front, sprung rear,
+        unsprung front). Every row is transformed on its own and the sums are taken one segment at a
+        time, so they are the same, bit for bit, however the samples were chunked."""
         fm, rm = self.front_model, self.rear_model
-        x = np.fft.rfft(self._detrend(fronts), axis=1)[:, self._index]
-        y = np.fft.rfft(self._detrend(rears), axis=1)[:, self._index]
+        x = np.fft.rfft(_detrended(fronts, self._ramp, self._ramp_norm), axis=1)[:, self._index]
+        y = np.fft.rfft(_detrended(blocks[0], self._ramp, self._ramp_norm), axis=1)[:, self._index]
         axx = np.abs(x) ** 2
         ayy = np.abs(y) ** 2
         cxy = np.conj(x) * y * np.exp(2j * np.pi * deltas[:, None] * self.f[None, :])
         # each tyre's dynamic load, m_s a_s + m_us a_us (N): its sum and sum of squares per segment
-        load = np.stack([fm.sprung_mass * loads[:, 2] + fm.unsprung_mass * loads[:, 0],
-                         rm.sprung_mass * loads[:, 3] + rm.unsprung_mass * loads[:, 1]], axis=1)  # fmt: skip
-        moments = np.stack([np.full(load.shape[:2], float(load.shape[2])), load.sum(axis=2),
-                            (load * load).sum(axis=2)], axis=2)  # (S, 2, 3)  # fmt: skip
+        masses = np.array([fm.sprung_mass, fm.unsprung_mass, rm.sprung_mass, rm.unsprung_mass])
+        moments = _load_moments(blocks[4], blocks[0], blocks[2], blocks[3], masses)
         _add_segments(self.A, self.B, self.C, self.K, self.K2, self._load, w, axx, ayy, cxy, moments)
-
-    def _detrend(self, x: np.ndarray) -> np.ndarray:
-        """Each row of `x` (S, n) less its least-squares line (row by row: the same whatever S)."""
-        slope = (x * self._ramp).sum(axis=1, keepdims=True) / self._ramp_norm
-        return x - x.mean(axis=1, keepdims=True) - self._ramp * slope
 
     # ------------------------------------------------------------------------------ likelihood
     def _response(self, qc: LinearQuarterCar, tire: TireStiffness, p_kpa: np.ndarray) -> np.ndarray:
