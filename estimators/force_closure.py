@@ -56,7 +56,8 @@ grid by :func:`closure_weights`).
 The stream takes the four corners' samples in time order and analyses each window once the stream
 holds ``margin_s`` beyond it, from a span (the windows ready, their fronts' delay and a margin each
 side, tapered; on a fixed lattice instead, ``spans="lattice"``, a window's moments do not depend on
-how the stream was cut; the online monitor feeds fixed 4 s blocks, so its estimates do not either);
+how the stream was cut; the online monitor feeds fixed blocks, one per update, so its estimates do not
+either);
 at 200 Hz (the spectrum cut there first). With 4 s windows, two a lattice span, on the first 30
 ``constant`` runs fed from the start in 2 s blocks, the damper's timing half the simulator's step:
 −0.9 ± 7.1 kPa at 10 s, +0.1 ± 3.0 at 20 s, +0.5 ± 2.2 at 30 s (80 of 120 tyres: classes A–C);
@@ -492,9 +493,10 @@ class ClosureConfig:
     per window, which passed most 0.5 s windows; 0.022 per s is the share 4 s windows had);
     analysis_rate_hz : the rate the integrals and moments run at; spans, span_windows : which windows
     share one span (one integration over them, their delays and the margins): ``ready``, those ready
-    at one :meth:`ClosureStream.add`, at most span_windows of them (the monitor feeds its 4 s update
-    blocks: 16 windows of 0.5 s a span); ``lattice``, groups of span_windows on a fixed lattice, so a
-    window's moments do not depend on how the stream is cut, but a group waits for its last window.
+    at one :meth:`ClosureStream.add`, at most span_windows of them (the monitor feeds its update
+    blocks, 8 s: two spans of 16 windows of 0.5 s); ``lattice``, groups of span_windows on a fixed
+    lattice, so a window's moments do not depend on how the stream is cut, but a group waits for its
+    last window.
     With 0.5 s windows in the monitor (scratch timing on one core of the 2-core machine): lattice
     groups of 2, 4 and 8 cost 6.3, 4.7 and 4.0 ms per second of four-corner data before the stream's
     loops were compiled; after, lattice 4 3.3 and ready 16 2.7 (2.0–2.2 without the closure), at

@@ -540,7 +540,7 @@ def monitor_command(
     ],
     out: Annotated[
         Path,
-        typer.Option("--out", help="Output Parquet: one row per update (every 4 s), per tyre the pressure, "
+        typer.Option("--out", help="Output Parquet: one row per update (every 8 s), per tyre the pressure, "
                      "its σ, 5 % and 95 % quantiles, flags, the warning's reference, probability and state, "
                      "the radius analysis and the pressure fused with it; the car's common-loss "
                      "probability."),
