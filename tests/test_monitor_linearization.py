@@ -187,7 +187,7 @@ def test_the_estimates_do_not_move_with_the_sampling_interval_s_last_digit(rough
     for dt in (1e-3, 1e-3 * (1.0 + 1e-12), 1e-3 * (1.0 - 1e-12)):
         monitor = TyreMonitor(corner_models(CORNERS, loads=loads), dt=dt)
         out.append(monitor.update(t, v, acc_s, acc_u))
-    assert out[0].t_s.size >= 5
+    assert out[0].t_s.size >= 3  # several updates compared
     for other in out[1:]:
         np.testing.assert_allclose(other.pressure_pa, out[0].pressure_pa, rtol=0, atol=1e-3)  # Pa
         np.testing.assert_allclose(other.spring_rate, out[0].spring_rate, rtol=1e-9)
