@@ -547,3 +547,18 @@ def test_a_road_with_no_roughness_is_not_read_as_four_soft_tyres(tmp_path, capsy
         assert (frame[f"{c}_status"] == "smooth").all()
         assert not frame[f"{c}_observable"].any() and not frame[f"{c}_warning"].any()
     assert f"windows: {int(round(20.0 / MonitorConfig().update_s))} smooth" in capsys.readouterr().out
+
+
+def test_the_update_interval_is_an_option_and_a_bad_one_is_named(run_file, tmp_path, capsys):
+    out = tmp_path / "m4.parquet"
+    assert main(["monitor", str(run_file), "--out", str(out), "--update-s", "4"]) == 0
+    frame = pq.read_table(out).to_pandas()
+    np.testing.assert_allclose(frame["t_s"], np.arange(1, 6) * 4.0 - 1e-3)  # 20 s: five updates
+    meta = json.loads(pq.read_table(out).schema.metadata[b"suvtwin.monitor"])
+    assert meta["config"]["update_s"] == 4.0
+    capsys.readouterr()
+    bad = tmp_path / "m3.parquet"
+    assert main(["monitor", str(run_file), "--out", str(bad), "--update-s", "3"]) == 2
+    said = capsys.readouterr().err
+    assert "--update-s" in said and "segment_s a multiple of it" in said
+    assert not bad.exists()
