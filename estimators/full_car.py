@@ -101,6 +101,7 @@ __all__ = [
     "blend_gain_at_delay",
     "gain_at_delay",
     "projected_cross_terms",
+    "projected_gains",
     "projected_terms",
     "static_forces",
     "suspension_force_responses",
@@ -297,17 +298,31 @@ def wheel_responses(
     out_rows[0, :3] = jac[corner]
     out_rows[1, 3 + corner] = 1.0
     rows = np.einsum("ij,fjk->fik", out_rows, inv)  # (F, 2, n): outputs per unit force on each DOF
-    j = 3 + corner
-    delta = tire_scale * kt[:, None] - kt_ref  # (P, 1): the grid's change of the corner's tyre rate
-    denom = 1.0 + delta * inv[None, :, j, j]  # (P, F)
-    # C D⁻¹ e_w for the wheels' DOFs w:
-    # rows[:, :, 3 + w] − δ rows[:, :, j] D0⁻¹[j, 3 + w] / (1 + δ D0⁻¹[j, j])
-    corr = rows[None, :, :, j, None] * inv[None, :, None, j, 3:7] * (delta / denom)[:, :, None, None]
-    per_force = rows[None, :, :, 3:7] - corr  # (P, F, 2, 4)
-    road = np.broadcast_to(road_ref, (n_p, n_f, 4)).copy()
-    road[:, :, corner] += delta  # the grid's own tyre rate
-    out = per_force * road[:, :, None, :]  # displacement per unit road elevation under each wheel
-    return out * s[None, :, None, None]  # acceleration s² X per road velocity s R
+    delta = tire_scale * kt - kt_ref  # (P,): the grid's change of the corner's tyre rate
+    out = np.empty((n_p, n_f, 2, 4), dtype=complex)
+    _grid_responses(np.ascontiguousarray(inv), np.ascontiguousarray(rows), np.ascontiguousarray(road_ref),
+                    s, delta, 3 + corner, out)  # fmt: skip
+    return out
+
+
+@cached_njit
+def _grid_responses(inv, rows, road_ref, s, delta, j, out):
+    """out[p, f, o, w] = s_f · road_w · (C D⁻¹ e_{3+w})_o for the tyre rate of DOF `j` changed by
+    delta[p] (:func:`wheel_responses`): with D0⁻¹ = `inv` (F, n, n) and C D0⁻¹ = `rows` (F, 2, n), by
+    Sherman–Morrison C D⁻¹ e_w = rows[f, o, w] − δ rows[f, o, j] D0⁻¹[j, w] / (1 + δ D0⁻¹[j, j]),
+    and the road's stiffness under wheel w `road_ref[f, w]` (+ δ under the corner's own wheel):
+    displacement per unit road elevation, times s for acceleration per road velocity."""
+    corner = j - 3
+    for f in range(s.size):
+        ijj = inv[f, j, j]
+        for p in range(delta.size):
+            d = delta[p]
+            g = d / (1.0 + d * ijj)
+            for o in range(2):
+                rj = rows[f, o, j] * g
+                for w in range(4):
+                    road = road_ref[f, w] + d if w == corner else road_ref[f, w]
+                    out[p, f, o, w] = (rows[f, o, 3 + w] - rj * inv[f, j, 3 + w]) * road * s[f]
 
 
 def _with_tyres(car: FullCar, f: npt.ArrayLike, speed_mps: float | None):
@@ -341,18 +356,55 @@ def suspension_force_responses(
     return (s**2)[:, None] * np.stack([x[:, :3] @ jac[corner], x[:, 3 + corner]], axis=1)
 
 
+def projected_gains(
+    h: np.ndarray, u1: np.ndarray, u2: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    r"""The projected gain's speed-free parts over both tracks, independent and coherent, in one pass:
+    A, B of :func:`projected_terms` and A', B' of :func:`projected_cross_terms`.
+
+    With :math:`p_w = \bar u_1 h_{\cdot,0,w} + \bar u_2 h_{\cdot,1,w}` the response along the
+    direction to wheel w's road, a track's front a = p_front and rear b = p_rear:
+    :math:`A = \sum_t |a_t|^2 + |b_t|^2`, :math:`B = \sum_t a_t \bar b_t`,
+    :math:`A' = 2\,\mathrm{Re}(a_L\bar a_R + b_L\bar b_R)`, :math:`B' = a_L\bar b_R + a_R\bar b_L`.
+    `h` (..., F, 2, 4) from :func:`wheel_responses`; (u1, u2) (F,). Returns A, A' (..., F) real and
+    B, B' (..., F) complex."""
+    h = np.asarray(h, dtype=complex)
+    lead = h.shape[:-3]
+    flat = np.ascontiguousarray(h.reshape((-1,) + h.shape[-3:]))
+    m, n_f = flat.shape[0], flat.shape[1]
+    a_sq, a1 = np.empty((m, n_f)), np.empty((m, n_f))
+    cross, b1 = np.empty((m, n_f), dtype=complex), np.empty((m, n_f), dtype=complex)
+    u1 = np.ascontiguousarray(np.broadcast_to(u1, n_f), dtype=complex)
+    u2 = np.ascontiguousarray(np.broadcast_to(u2, n_f), dtype=complex)
+    _projections(flat, u1, u2, a_sq, cross, a1, b1)
+    shape = lead + (n_f,)
+    return a_sq.reshape(shape), cross.reshape(shape), a1.reshape(shape), b1.reshape(shape)
+
+
+@cached_njit
+def _projections(h, u1, u2, a_sq, cross, a1, b1):
+    """:func:`projected_gains` on h (M, F, 2, 4): out arrays (M, F)."""
+    (front_l, rear_l), (front_r, rear_r) = TRACKS
+    p = np.empty(4, dtype=np.complex128)
+    for m in range(h.shape[0]):
+        for f in range(h.shape[1]):
+            c1, c2 = np.conj(u1[f]), np.conj(u2[f])
+            for w in range(4):
+                p[w] = c1 * h[m, f, 0, w] + c2 * h[m, f, 1, w]
+            al, bl, ar, br = p[front_l], p[rear_l], p[front_r], p[rear_r]
+            a_sq[m, f] = (al.real**2 + al.imag**2 + bl.real**2 + bl.imag**2) + (
+                ar.real**2 + ar.imag**2 + br.real**2 + br.imag**2)
+            cross[m, f] = al * np.conj(bl) + ar * np.conj(br)
+            a1[m, f] = 2.0 * (al * np.conj(ar) + bl * np.conj(br)).real
+            b1[m, f] = al * np.conj(br) + ar * np.conj(bl)
+
+
 def projected_terms(h: np.ndarray, u1: np.ndarray, u2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Speed-free parts of the projected gain over both tracks: A = Σ (|a|² + |b|²) and B = Σ a b̄.
 
     `h` (..., F, 2, 4) from :func:`wheel_responses`; (u1, u2) (F,) the unit direction projected on.
-    Returns A (..., F) real and B (..., F) complex."""
-    proj = np.conj(u1)[:, None] * h[..., 0, :] + np.conj(u2)[:, None] * h[..., 1, :]  # (..., F, 4)
-    a_sq = np.zeros(proj.shape[:-1])
-    cross = np.zeros(proj.shape[:-1], dtype=complex)
-    for front, rear in TRACKS:
-        a, b = proj[..., front], proj[..., rear]
-        a_sq += np.abs(a) ** 2 + np.abs(b) ** 2
-        cross += a * np.conj(b)
+    Returns A (..., F) real and B (..., F) complex (:func:`projected_gains`)."""
+    a_sq, cross, _, _ = projected_gains(h, u1, u2)
     return a_sq, cross
 
 
@@ -362,11 +414,10 @@ def projected_cross_terms(h: np.ndarray, u1: np.ndarray, u2: np.ndarray) -> tupl
     (module docstring), so the gain at coherence γ and delay τ is
     :math:`A + \gamma A' + 2\,\mathrm{Re}\big((B + \gamma B')\,e^{i2\pi f\tau}\big)`.
 
-    Shapes as :func:`projected_terms`'s: A' (..., F) real and B' (..., F) complex."""
-    proj = np.conj(u1)[:, None] * h[..., 0, :] + np.conj(u2)[:, None] * h[..., 1, :]  # (..., F, 4)
-    (front_l, rear_l), (front_r, rear_r) = TRACKS
-    a_l, b_l, a_r, b_r = proj[..., front_l], proj[..., rear_l], proj[..., front_r], proj[..., rear_r]
-    return 2.0 * np.real(a_l * np.conj(a_r) + b_l * np.conj(b_r)), a_l * np.conj(b_r) + a_r * np.conj(b_l)
+    Shapes as :func:`projected_terms`'s: A' (..., F) real and B' (..., F) complex
+    (:func:`projected_gains`)."""
+    _, _, a1, b1 = projected_gains(h, u1, u2)
+    return a1, b1
 
 
 def axle_coherence_parts(

@@ -192,8 +192,7 @@ from suvtwin.estimators.force_closure import (
 from suvtwin.estimators.full_car import (
     axle_coherence_parts,
     blend_gain_at_delay,
-    projected_cross_terms,
-    projected_terms,
+    projected_gains,
     wheel_responses,
 )
 from suvtwin.estimators.joint import N0, LinearQuarterCar, envelope_power, signal_direction, signal_gain
@@ -1198,10 +1197,9 @@ class TyreMonitor:
                 h = wheel_responses(self._fine, qc.full_car, qc.corner, kt_inflated, spring_rate=rate,
                                     damping=float(cd), tire_scale=contact)  # fmt: skip
                 u = signal_direction(self._fine, model)
-                a_sq, cross = projected_terms(h, *u)
+                a_sq, cross, a1, b1 = projected_gains(h, *u)
                 self._car_a[slot, d], self._car_b[slot, d] = a_sq / self.noise, cross / self.noise
-                a_sq, cross = projected_cross_terms(h, *u)
-                self._car_a1[slot, d], self._car_b1[slot, d] = a_sq / self.noise, cross / self.noise
+                self._car_a1[slot, d], self._car_b1[slot, d] = a1 / self.noise, b1 / self.noise
             u1, u2 = signal_direction(self.freq, model)
             self._u11[slot, d, 0] = np.abs(u1) ** 2 / self.noise
             self._u22[slot, d, 0] = np.abs(u2) ** 2 / self.noise
