@@ -625,22 +625,14 @@ class RollingRadius:
         α (the value where g = 0, the newest block), its variance, β, σ_β, whether it could be fitted
         (n ≥ 3, g not constant) and the residual sum of squares (:meth:`_trend`), each (…, C)."""
         cfg = self.config
-        s = self._s
-        count = np.maximum(n, 1)
-        g_bar = np.where(mask, g, 0.0).sum(axis=-2) / count
-        x_bar = np.where(mask, s.memory, 0.0).sum(axis=-2) / count
-        dg = np.where(mask, g - g_bar[..., None, :], 0.0)
-        s_gg = (dg**2).sum(axis=-2)
-        ok = (n >= 3) & (s_gg > 1e-12)
-        s_gg_safe = np.where(ok, s_gg, 1.0)
-        beta = np.where(ok, (dg * np.where(mask, s.memory - x_bar, 0.0)).sum(axis=-2) / s_gg_safe, 0.0)
-        resid = np.where(mask, s.memory - x_bar - beta[..., None, :] * (g - g_bar[..., None, :]), 0.0)
-        rss = (resid**2).sum(axis=-2)
-        s0 = cfg.prior_block_permille * 1e-3
-        s_r2 = (cfg.prior_weight * s0**2 + rss) / (cfg.prior_weight + np.maximum(n - 2, 0))
-        alpha = x_bar - beta * g_bar
-        alpha_var = s_r2 * (1.0 / count + g_bar**2 / s_gg_safe)
-        return alpha, alpha_var, beta, np.sqrt(s_r2 / s_gg_safe), ok, rss
+        shape = g.shape[:-2] + (g.shape[-1],)
+        g3 = np.ascontiguousarray(g.reshape((-1,) + g.shape[-2:]), dtype=float)
+        out = np.empty((5, g3.shape[0], g3.shape[2]))
+        ok = np.empty((g3.shape[0], g3.shape[2]), dtype=np.bool_)
+        _least_squares(g3, np.ascontiguousarray(mask), self._s.memory, n.astype(np.int64), cfg.prior_weight,
+                       cfg.prior_block_permille * 1e-3, out, ok)  # fmt: skip
+        alpha, alpha_var, beta, sigma_beta, rss = (a.reshape(shape) for a in out)
+        return alpha, alpha_var, beta, sigma_beta, ok.reshape(shape), rss
 
     def _ages(self) -> tuple[np.ndarray, np.ndarray]:
         """Each memory slot's age in blocks (M, C; the newest 0) and whether it holds one of the
@@ -656,19 +648,82 @@ class RollingRadius:
         more)."""
         cfg = self.config
         s = self._s
-        n = s.filled.copy()
-        age, mask = self._ages()
-        if skip_newest:
-            skip = n >= 2
-            mask &= ~((age == 0) & skip[None, :])
-            n = n - skip
-        total = np.where(mask, s.memory, 0.0).sum(axis=0)
-        mean = total / np.maximum(n, 1)
-        ss = np.where(mask, (s.memory - mean) ** 2, 0.0).sum(axis=0)
-        s0 = cfg.prior_block_permille * 1e-3
-        var = (cfg.prior_weight * s0**2 + ss) / (cfg.prior_weight + np.maximum(n - 1, 0))
-        rough = np.where(mask, s.scatter, 0.0).sum(axis=0) / np.maximum(n, 1)
+        n_c = s.memory.shape[1]
+        mean, var, rough = np.empty(n_c), np.empty(n_c), np.empty(n_c)
+        n = np.empty(n_c, dtype=s.filled.dtype)
+        _memory_moments(s.memory, s.scatter, s.head.astype(np.int64), s.filled.astype(np.int64), skip_newest,
+                        cfg.prior_weight, cfg.prior_block_permille * 1e-3, mean, var, n, rough)  # fmt: skip
         return mean, var, n, rough
+
+
+@cached_njit
+def _memory_moments(memory, scatter, head, filled, skip_newest, prior_weight, s0, mean, var, n_out, rough):
+    """:meth:`RollingRadius._moments` of the ring `memory` / `scatter` (M, C), slot j holding the
+    block (head − 1 − j) mod M old where that age is below `filled`; the newest left out with
+    `skip_newest` where a wheel holds two or more. Sums over the slots in order (numpy's over axis 0)."""
+    m, n_c = memory.shape
+    for c in range(n_c):
+        n = filled[c]
+        skip = skip_newest and n >= 2
+        count = n - 1 if skip else n
+        total = 0.0
+        scat = 0.0
+        for j in range(m):
+            age = (head[c] - 1 - j) % m
+            if age < n and not (skip and age == 0):
+                total += memory[j, c]
+                scat += scatter[j, c]
+        mu = total / max(count, 1)
+        ss = 0.0
+        for j in range(m):
+            age = (head[c] - 1 - j) % m
+            if age < n and not (skip and age == 0):
+                ss += (memory[j, c] - mu) ** 2
+        mean[c] = mu
+        var[c] = (prior_weight * s0**2 + ss) / (prior_weight + max(count - 1, 0))
+        n_out[c] = count
+        rough[c] = scat / max(count, 1)
+
+
+@cached_njit
+def _least_squares(g, mask, memory, n, prior_weight, s0, out, ok):
+    """:meth:`RollingRadius._fit` for regressors `g` (S, M, C) over `mask` (M, C): into `out` (5, S, C)
+    α, its variance, β, σ_β and the residual sum of squares, and `ok` (S, C). Sums over the slots in
+    order."""
+    n_s, m, n_c = g.shape
+    for k in range(n_s):
+        for c in range(n_c):
+            count = max(n[c], 1)
+            g_sum = 0.0
+            x_sum = 0.0
+            for j in range(m):
+                if mask[j, c]:
+                    g_sum += g[k, j, c]
+                    x_sum += memory[j, c]
+            g_bar = g_sum / count
+            x_bar = x_sum / count
+            s_gg = 0.0
+            s_gx = 0.0
+            for j in range(m):
+                if mask[j, c]:
+                    dg = g[k, j, c] - g_bar
+                    s_gg += dg * dg
+                    s_gx += dg * (memory[j, c] - x_bar)
+            good = n[c] >= 3 and s_gg > 1e-12
+            s_gg_safe = s_gg if good else 1.0
+            beta = s_gx / s_gg_safe if good else 0.0
+            rss = 0.0
+            for j in range(m):
+                if mask[j, c]:
+                    r = memory[j, c] - x_bar - beta * (g[k, j, c] - g_bar)
+                    rss += r * r
+            s_r2 = (prior_weight * s0**2 + rss) / (prior_weight + max(n[c] - 2, 0))
+            out[0, k, c] = x_bar - beta * g_bar
+            out[1, k, c] = s_r2 * (1.0 / count + g_bar**2 / s_gg_safe)
+            out[2, k, c] = beta
+            out[3, k, c] = np.sqrt(s_r2 / s_gg_safe)
+            out[4, k, c] = rss
+            ok[k, c] = good
 
 
 @cached_njit
