@@ -407,9 +407,9 @@ class MonitorConfig:
         gain tables are made for; a window's tables are its four neighbours' blended. 4 %: on a
         varied hour (bench ``monitor_cost.py``, the rates 1–9 times the design's) 216 lattice points
         against 320 at 2 % (the default until 2026-12-05), 466 tables made against 687 (32 kept), the
-        100 ``constant`` runs' errors and the ``drop``, ``slow_leak``, ``low_speed`` and ``warning``
-        scores unchanged (with the radii ±6.50 / 3.34 kPa at 10 / 30 s against ±6.54 / 3.36; the
-        100 ``warning`` runs 98 % warned against 97 %); at 10 % ±7.02 / 3.45.
+        100 ``constant`` runs' errors and the ``drop``, ``slow_leak`` and ``low_speed`` scores
+        unchanged (with the radii ±6.50 / 3.34 kPa at 10 / 30 s against ±6.54 / 3.36), the 100
+        ``warning`` runs 98 % warned against 97 %; at 10 % ±7.02 / 3.45.
     table_slots : int
         Most gain tables (corner and rate) kept at once; the least recently used is replaced.
     damper_distortion : bool
