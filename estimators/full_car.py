@@ -259,7 +259,7 @@ def wheel_responses(
     kt: npt.ArrayLike,
     *,
     spring_rate: float | None = None,
-    damping: float | None = None,
+    damping: float | npt.ArrayLike | None = None,
     tire_scale: float = 1.0,
     speed_mps: float | None = None,
 ) -> np.ndarray:
@@ -269,15 +269,19 @@ def wheel_responses(
     `spring_rate`, `damping`: the corner's own (default the car's); `tire_scale`: its tyre's
     stiffness and damping are multiplied by it (the share of time in contact); `speed_mps`: with
     the tyres' lateral slip at that speed (module docstring; None: without). Returns complex
-    (P, F, 2, 4): [p, f, 0 body / 1 wheel, road wheel fl, fr, rl, rr], (m/s²)/(m/s)."""
+    (P, F, 2, 4): [p, f, 0 body / 1 wheel, road wheel fl, fr, rl, rr], (m/s²)/(m/s). With several
+    dampings `damping` (D,), (D, P, F, 2, 4), one block per damping: each damping's dynamic
+    stiffness is the first's changed by s δc e eᵀ (e the corner's compression z_u − z_b in the
+    coordinates), a rank-one change, so the car is inverted once for all of them (Sherman–Morrison)."""
     f = np.atleast_1d(np.asarray(f, dtype=float))
     kt = np.atleast_1d(np.asarray(kt, dtype=float))
+    several = damping is not None and np.ndim(damping) == 1
     ks = np.array(car.spring_rate, dtype=float)
     cs = np.array(car.damping, dtype=float)
     if spring_rate is not None:
         ks[corner] = spring_rate
-    if damping is not None:
-        cs[corner] = damping
+    dampings = np.atleast_1d(np.asarray(cs[corner] if damping is None else damping, dtype=float))
+    cs[corner] = dampings[0]
     jac, stiff, damp, mass = _body_matrices(car, ks, cs)
     kt_all = np.array(car.tire_stiffness, dtype=float)
     ct_all = np.array(car.tire_damping, dtype=float)
@@ -291,18 +295,29 @@ def wheel_responses(
     road_ref = np.array(kt_all, dtype=complex)[None, :] + s[:, None] * ct[None, :]  # (F, 4) per elevation
     road_ref[:, corner] += kt_ref - kt_all[corner]
     dyn = _dynamic_stiffness(car, s, stiff, damp, mass, speed_mps)  # (F, n, n)
+    n = dyn.shape[-1]
     idx = 3 + np.arange(4)
     dyn[:, idx, idx] += road_ref
     inv = np.linalg.inv(dyn)
-    out_rows = np.zeros((2, dyn.shape[-1]))
+    out_rows = np.zeros((2, n))
     out_rows[0, :3] = jac[corner]
     out_rows[1, 3 + corner] = 1.0
     rows = np.einsum("ij,fjk->fik", out_rows, inv)  # (F, 2, n): outputs per unit force on each DOF
     delta = tire_scale * kt - kt_ref  # (P,): the grid's change of the corner's tyre rate
-    out = np.empty((n_p, n_f, 2, 4), dtype=complex)
-    _grid_responses(np.ascontiguousarray(inv), np.ascontiguousarray(rows), np.ascontiguousarray(road_ref),
-                    s, delta, 3 + corner, out)  # fmt: skip
-    return out
+    e = np.zeros(n)  # the corner's compression z_u − z_b (_body_matrices' sel row)
+    e[:3], e[3 + corner] = -jac[corner], 1.0
+    inv_e, e_inv = inv @ e, e @ inv  # (F, n) each
+    out = np.empty((dampings.size, n_p, n_f, 2, 4), dtype=complex)
+    for d, cd in enumerate(dampings):
+        inv_d, rows_d = inv, rows
+        if d > 0:  # D⁻¹ − g (D⁻¹e)(eᵀD⁻¹), g = s δc / (1 + s δc eᵀD⁻¹e)
+            g = s * (cd - dampings[0])
+            g = g / (1.0 + g * (e_inv @ e))
+            inv_d = inv - g[:, None, None] * inv_e[:, :, None] * e_inv[:, None, :]
+            rows_d = rows - g[:, None, None] * (inv_e @ out_rows.T)[:, :, None] * e_inv[:, None, :]
+        _grid_responses(np.ascontiguousarray(inv_d), np.ascontiguousarray(rows_d),
+                        np.ascontiguousarray(road_ref), s, delta, 3 + corner, out[d])  # fmt: skip
+    return out if several else out[0]
 
 
 @cached_njit
@@ -313,11 +328,10 @@ def _grid_responses(inv, rows, road_ref, s, delta, j, out):
     and the road's stiffness under wheel w `road_ref[f, w]` (+ δ under the corner's own wheel):
     displacement per unit road elevation, times s for acceleration per road velocity."""
     corner = j - 3
-    for f in range(s.size):
-        ijj = inv[f, j, j]
-        for p in range(delta.size):
-            d = delta[p]
-            g = d / (1.0 + d * ijj)
+    for p in range(delta.size):  # in the output's order
+        d = delta[p]
+        for f in range(s.size):
+            g = d / (1.0 + d * inv[f, j, j])
             for o in range(2):
                 rj = rows[f, o, j] * g
                 for w in range(4):

@@ -1193,16 +1193,18 @@ class TyreMonitor:
         contact = (1.0 + self.config.rate_step) ** -lift
         kt_inflated = self._kt_coarse[c]
         kt = contact * kt_inflated
+        if qc.full_car is not None:  # every damping's responses at once (one inversion)
+            responses = wheel_responses(self._fine, qc.full_car, qc.corner, kt_inflated, spring_rate=rate,
+                                        damping=np.asarray(self.dampings[c], dtype=float),
+                                        tire_scale=contact)  # fmt: skip
         for d, cd in enumerate(self.dampings[c]):
             model = replace(qc, damping=float(cd), spring_rate=rate, tire_damping=contact * qc.tire_damping)
             if qc.full_car is None:
                 g = signal_gain(self._fine[None, :], kt[:, None], model) / self.noise
                 self._gain[slot, d] = np.add.reduceat(g, self._group_start, axis=1) / self._group_size
             else:  # the full car: the speed-free parts, the speed added per window (_window_grid)
-                h = wheel_responses(self._fine, qc.full_car, qc.corner, kt_inflated, spring_rate=rate,
-                                    damping=float(cd), tire_scale=contact)  # fmt: skip
                 u = signal_direction(self._fine, model)
-                a_sq, cross, a1, b1 = projected_gains(h, *u)
+                a_sq, cross, a1, b1 = projected_gains(responses[d], *u)
                 self._car_a[slot, d], self._car_b[slot, d] = a_sq / self.noise, cross / self.noise
                 self._car_a1[slot, d], self._car_b1[slot, d] = a1 / self.noise, b1 / self.noise
             u1, u2 = signal_direction(self.freq, model)

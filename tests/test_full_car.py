@@ -110,6 +110,18 @@ def test_the_tyre_grid_by_rank_one_updates_equals_a_direct_solve():
         np.testing.assert_allclose(got[p], direct, rtol=1e-9, atol=1e-12)
 
 
+def test_several_dampings_by_rank_one_updates_equal_one_call_each():
+    # a damping is a rank-one change of the dynamic stiffness (s δc e eᵀ): one inversion for all of them
+    f = np.linspace(0.2, 30.0, 37)
+    kt = np.linspace(1.2e5, 3.6e5, 5)
+    dampings = np.array([1800.0, 3100.0, 5200.0])
+    got = wheel_responses(f, CAR, 1, kt, spring_rate=6.0e4, damping=dampings, tire_scale=0.9)
+    assert got.shape == (3, 5, 37, 2, 4)
+    for d, c in enumerate(dampings):
+        one = wheel_responses(f, CAR, 1, kt, spring_rate=6.0e4, damping=float(c), tire_scale=0.9)
+        np.testing.assert_allclose(got[d], one, rtol=1e-9, atol=1e-12 * np.abs(one).max())
+
+
 def test_projected_gain_at_a_delay_is_the_spectrum_along_the_direction():
     f = np.linspace(0.5, 25.0, 50)
     qc = LinearQuarterCar(sprung_mass=450.0, unsprung_mass=52.75, spring_rate=45e3, damping=3000.0)
