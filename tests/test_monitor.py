@@ -2,6 +2,7 @@
 low speed, tracking a pressure change; the deflation warning on hand-made estimates."""
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -191,11 +192,23 @@ def test_monitor_follows_a_pressure_drop():
     late = out.t_s > 45
     assert np.all(np.abs(p[late] - 180) <= 15.0)
     assert np.all(np.abs(p[late] - 180) <= 2.0 * s[late])
+    # updates every 8 s, every 4 s (change_update_s) while the changing regime holds a share of the
+    # posterior (here, one quarter car on its own, at most 0.17: the mechanism checked at 0.1)
+    cfg = MonitorConfig(change_update_probability=0.1)
+    quick = _feed(TyreMonitor([QC], dt=DT, config=cfg), acc, SPEED_MPS, 10000)
+    step = np.round(np.diff(quick.t_s), 6)
+    fast = quick.change_probability[:-1, 0] >= cfg.change_update_probability
+    np.testing.assert_array_equal(step, np.where(fast, cfg.change_update_s, cfg.update_s))
+    assert np.any(fast & (quick.t_s[:-1] > 20.0)) and np.any(~fast)
+    steady = _feed(TyreMonitor([QC], dt=DT, config=replace(cfg, change_update_s=None)), acc, SPEED_MPS, 10000)
+    np.testing.assert_array_equal(np.round(np.diff(steady.t_s), 6), cfg.update_s)
 
 
 def test_config_is_checked():
     with pytest.raises(ValueError, match="update_s"):
         MonitorConfig(segment_s=8.0, update_s=3.0)
+    with pytest.raises(ValueError, match="change_update_s"):
+        MonitorConfig(update_s=8.0, change_update_s=3.0)
     with pytest.raises(ValueError, match="change_drift_kpa"):
         MonitorConfig(steady_drift_kpa=2.0, change_drift_kpa=1.0)
     with pytest.raises(ValueError, match="change_every_s"):
