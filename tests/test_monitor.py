@@ -108,6 +108,21 @@ def test_faults_are_skipped_and_counted_never_fatal(runs):
     assert set(np.unique(out.status)) <= set(range(len(SKIP_REASONS)))
 
 
+def test_a_window_with_a_gap_keeps_its_longest_clean_stretch(runs):
+    # a 1 s gap 1.5 s before a window's end (13.5–14.5 s of the 8–16 s window): the 5.5 s before it are
+    # read (the 1.5 s after it are less than a quarter window), and the window counts for its share
+    acc = runs.acc[:2].copy()
+    acc[0, 13500:14500, :] = np.nan
+    monitor = TyreMonitor([QC] * 2, dt=DT)
+    out = _feed(monitor, acc, SPEED_MPS, 4000)
+    assert monitor.counts["gap"][0] == 0 and monitor.counts["used"][0] == monitor.counts["segments"]
+    # the stretch read changes the estimate at 16 s from the clean corner's by less than its σ
+    clean = _feed(TyreMonitor([QC] * 2, dt=DT), runs.acc[:2], SPEED_MPS, 4000)
+    k = int(np.argmin(np.abs(out.t_s - 16.0)))
+    assert out.pressure_sigma_pa[k, 0] > clean.pressure_sigma_pa[k, 0]  # less data, less certain
+    assert abs(out.pressure_pa[k, 0] - clean.pressure_pa[k, 0]) <= clean.pressure_sigma_pa[k, 0]
+
+
 def _prior_sigma_pa() -> float:
     """σ of the monitor's default prior: N(the tyre's nominal pressure, 1000²) kPa cut to its
     60–400 kPa range (scipy's truncated normal): within 0.2 % of the uniform's (400 − 60)/√12."""
