@@ -95,9 +95,11 @@ import scipy.signal
 
 from suvtwin.errors import InputError
 from suvtwin.jit import cached_njit
-from suvtwin.suspension_law import (  # _damper, _force: the laws' compiled forms, for _force_balance
+from suvtwin.suspension_law import (  # the laws' compiled forms, for _force_balance and _span_forces
+    _SIGMA_FLOOR,
     SuspensionLaw,
     _damper,
+    _equivalent,
     _force,
     equivalent_spring_rate,
 )
@@ -343,45 +345,109 @@ def windows_moments(
     F) summed over the usable `m`-sample Hann windows whose rear starts at `rear_at` (W,) and front at
     `front_at` (W,) (sample indices: the delay's whole samples), the delay's remaining `fraction_s`
     (W,) s a phase; and how many were usable per track (T,)."""
+    signals = [*fronts, *rears]
+    n_t = len(rears)
+    rows = np.arange(2 * n_t, dtype=np.int64)
+    return _rows_moments(np.stack([s.z_u for s in signals]), np.stack([s.force for s in signals]),
+                         np.stack([s.usable for s in signals]), rows[:n_t], rows[n_t:], rear_at, front_at,
+                         fraction_s, m, dt=dt, band_hz=band_hz)  # fmt: skip
+
+
+def _rows_moments(
+    z_u: np.ndarray, force: np.ndarray, usable: np.ndarray, front_rows: np.ndarray, rear_rows: np.ndarray,
+    rear_at: np.ndarray, front_at: np.ndarray, fraction_s: np.ndarray, m: int, *, dt: float,
+    band_hz: tuple[float, float],
+) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """:func:`windows_moments` from the corners' signals as rows: heights `z_u` (m), forces `force` (N)
+    and `usable` (K, n), each track's front and rear rows `front_rows`, `rear_rows` (T,) (the stream's
+    form: its span's corners as they came, none copied). Only the usable windows are transformed (one
+    batched FFT; on an hour's varied drive the stream passed over a third of each track's windows:
+    a stop, lift-off or the speed), their moments summed in one compiled pass."""
     band_freq, band, hann = _window_basis(m, float(dt), tuple(band_hz))
-    out = np.zeros((len(rears), MOMENTS, band_freq.size), dtype=complex)
-    used = np.zeros(len(rears), dtype=int)
+    n_t = rear_rows.size
+    out = np.zeros((n_t, MOMENTS, band_freq.size), dtype=complex)
     if rear_at.size == 0:
-        return out, used
-    span = np.arange(m)
-    r_idx, f_idx = rear_at[:, None] + span, front_at[:, None] + span  # (W, m)
-    ok = np.stack([rear.usable[r_idx].all(axis=1) & front.usable[f_idx].all(axis=1)
-                   for front, rear in zip(fronts, rears, strict=True)])  # (T, W)  # fmt: skip
-    if not ok.any():
-        return out, used
-    # (T, W, 4, m): per track and window the rear's height and force, the front's delayed ones
-    stack = np.stack([np.stack([rear.z_u[r_idx], rear.force[r_idx], front.z_u[f_idx], front.force[f_idx]],
-                               axis=1) for front, rear in zip(fronts, rears, strict=True)])  # fmt: skip
-    # each signal's mean under the window removed (its leakage into the band); (T, W, 4, F)
-    dft = np.fft.rfft((stack - (stack @ hann)[..., None] / hann.sum()) * hann, axis=-1)[..., band]
-    phase = np.exp(-1j * 2.0 * np.pi * np.outer(fraction_s, band_freq))  # (W, F)
-    for i, keep in enumerate(ok):  # each track's usable windows
-        if keep.any():
-            _moment_sums(np.ascontiguousarray(dft[i, keep]), np.ascontiguousarray(phase[keep]), out[i])
+        return out, np.zeros(n_t, dtype=int)
+    ok, stack = _usable_windows(z_u, force, usable, front_rows, rear_rows,
+                                np.asarray(rear_at, dtype=np.int64), np.asarray(front_at, dtype=np.int64),
+                                hann)  # fmt: skip
+    if stack.shape[0]:
+        # the band's DFTs of the usable windows (U, 4, F), each window's delay's fraction a phase (W, F)
+        dft = np.ascontiguousarray(np.fft.rfft(stack, axis=-1)[..., band])
+        phase = np.exp(-1j * 2.0 * np.pi * np.outer(fraction_s, band_freq))
+        _moment_sums(dft, phase, ok, out)
     return out, ok.sum(axis=1)
 
 
 @cached_njit
-def _moment_sums(dft, phase, out):
-    """Add to `out` (:data:`MOMENTS`, F) each window's moments from its band's DFTs `dft` (W, 4, F) of
-    (Z_u,r, F_r, Z_u,f, F_f) and its delay's fractional `phase` (W, F): with a = Z_u,r − Z_u,f·phase,
-    b = F_r, c = F_f·phase, |a|², |b|², |c|², b ā, c ā, b c̄ (:func:`window_moments`), the windows in order."""
-    for w in range(dft.shape[0]):
-        for f in range(dft.shape[2]):
-            a = dft[w, 0, f] - dft[w, 2, f] * phase[w, f]
-            b = dft[w, 1, f]
-            c = dft[w, 3, f] * phase[w, f]
-            out[0, f] += abs(a) ** 2
-            out[1, f] += abs(b) ** 2
-            out[2, f] += abs(c) ** 2
-            out[3, f] += b * a.conjugate()
-            out[4, f] += c * a.conjugate()
-            out[5, f] += b * c.conjugate()
+def _usable_windows(z_u, force, usable, front_rows, rear_rows, rear_at, front_at, hann):
+    """Which windows are usable per track, ok (T, W) (every sample of the rear's window at `rear_at` and
+    of the front's at `front_at` usable), and those windows' (Z_u,r, F_r, Z_u,f, F_f), each less its
+    mean under the Hann window `hann` (m,) and times it, stacked (U, 4, m) in (track, window) order
+    (:func:`_rows_moments`)."""
+    n_t, n_w, m = rear_rows.size, rear_at.size, hann.size
+    ok = np.zeros((n_t, n_w), dtype=np.bool_)
+    count = 0
+    for t in range(n_t):
+        for w in range(n_w):
+            good = True
+            for j in range(m):
+                if not (usable[rear_rows[t], rear_at[w] + j] and usable[front_rows[t], front_at[w] + j]):
+                    good = False
+                    break
+            ok[t, w] = good
+            count += good
+    weight = 0.0
+    for j in range(m):
+        weight += hann[j]
+    stack = np.empty((count, 4, m))
+    u = 0
+    for t in range(n_t):
+        for w in range(n_w):
+            if not ok[t, w]:
+                continue
+            _hann_row(z_u[rear_rows[t]], rear_at[w], hann, weight, stack[u, 0])
+            _hann_row(force[rear_rows[t]], rear_at[w], hann, weight, stack[u, 1])
+            _hann_row(z_u[front_rows[t]], front_at[w], hann, weight, stack[u, 2])
+            _hann_row(force[front_rows[t]], front_at[w], hann, weight, stack[u, 3])
+            u += 1
+    return ok, stack
+
+
+@cached_njit
+def _hann_row(x, at, hann, weight, out):
+    """x[at : at + m] less its mean under the Hann window `hann` (m,) (its weights summing to `weight`),
+    times the window, into `out` (m,): the signal's mean leaks into the band otherwise."""
+    mean = 0.0
+    for j in range(hann.size):
+        mean += x[at + j] * hann[j]
+    mean /= weight
+    for j in range(hann.size):
+        out[j] = (x[at + j] - mean) * hann[j]
+
+
+@cached_njit
+def _moment_sums(dft, phase, ok, out):
+    """Add to `out` (T, :data:`MOMENTS`, F) each usable window's moments from its band's DFTs `dft` (U, 4,
+    F) of (Z_u,r, F_r, Z_u,f, F_f), U the True entries of `ok` (T, W) in order, and its delay's
+    fractional `phase` (W, F): with a = Z_u,r − Z_u,f·phase, b = F_r, c = F_f·phase, |a|², |b|², |c|²,
+    b ā, c ā, b c̄ (:func:`window_moments`), each track's windows in order."""
+    u = 0
+    for t in range(ok.shape[0]):
+        for w in range(ok.shape[1]):
+            if not ok[t, w]:
+                continue
+            for f in range(dft.shape[2]):
+                a = dft[u, 0, f] - dft[u, 2, f] * phase[w, f]
+                b = dft[u, 1, f]
+                c = dft[u, 3, f] * phase[w, f]
+                out[t, 0, f] += abs(a) ** 2
+                out[t, 1, f] += abs(b) ** 2
+                out[t, 2, f] += abs(c) ** 2
+                out[t, 3, f] += b * a.conjugate()
+                out[t, 4, f] += c * a.conjugate()
+                out[t, 5, f] += b * c.conjugate()
+            u += 1
 
 
 @functools.lru_cache(maxsize=16)
@@ -579,6 +645,17 @@ class ClosureStream:
         self.max_shift = q * int(math.ceil(self.wheelbase / cfg.min_speed_mps / (q * dt)) + 1)
         self.n_bins = band_of(self.m // q, q * dt, cfg.band_hz).size
         self._tapers: dict[int, np.ndarray] = {}  # the spans' tapers by length (_analyse)
+        # what _analyse's compiled passes take, made once: the corners in the tracks (sorted) as rows,
+        # each one's axle partner's row, each track's front and rear rows, the corners' parts as arrays
+        corners = sorted({c for pair in self.tracks for c in pair})
+        row = {c: i for i, c in enumerate(corners)}
+        self._corners = np.array(corners, dtype=np.int64)
+        self._partner_rows = np.array([row[self.partner[c]] for c in corners], dtype=np.int64)
+        self._front_rows = np.array([row[f] for f, _ in self.tracks], dtype=np.int64)
+        self._rear_rows = np.array([row[r] for _, r in self.tracks], dtype=np.int64)
+        self._law_values = np.array([self.parts[c].law.values for c in corners], dtype=float)
+        self._corner_values = np.array([(p.unsprung_mass, p.anti_roll, p.static_travel, p.static_load)
+                                        for p in (self.parts[c] for c in corners)], dtype=float)  # fmt: skip
         self.reset()
 
     def weights(self, front: int, rear: int, k_front, k_rear, *, tyre_damping: float, noise_sigma: float):
@@ -651,53 +728,69 @@ class ClosureStream:
 
     def _analyse(self, starts, moments, windows, skipped) -> None:
         """The moments of the windows starting at `starts` (a group: those ready, or a group on the fixed
-        lattice) from one span: their delayed fronts and the margins."""
+        lattice) from one span: their delayed fronts and the margins. The speed checks come first: a
+        group none of whose windows passes them needs no integrals."""
         cfg = self.config
-        corners = sorted({c for pair in self.tracks for c in pair})
-        row = {c: i for i, c in enumerate(corners)}
         q, dt = self.q, self.q * self.dt
         lo = starts[0] - self.max_shift - self.margin - self._first
         hi = starts[-1] + self.m + self.margin - self._first
+        # each window's speed over it and the largest delay before it, the windows a half window apart
+        # (a strided view: numpy's mean and ptp per row, as on each window's slice)
+        first = starts[0] - self._first - self.max_shift
+        speeds = np.lib.stride_tricks.sliding_window_view(
+            self._v[first : starts[-1] - self._first + self.m], self.max_shift + self.m)[:: self.m // 2]
+        mean = speeds.mean(axis=1)
+        span_s = speeds.shape[1] * self.dt
+        spread = np.ptp(speeds, axis=1)
+        slow = (mean < cfg.min_speed_mps) | (spread > cfg.max_speed_change_per_s * mean * span_s)
+        skipped += int(slow.sum())
+        if slow.all():
+            return
+        mean = mean[~slow]
+        # the kept rear windows' first samples in the span (analysed samples)
+        rear_at = (np.asarray(starts, dtype=np.int64)[~slow] - self._first - lo) // q
+        delay = self.wheelbase / mean
+        shift = np.rint(delay / dt).astype(np.int64)
         # the margins tapered (Tukey) to zero: the integrals' error from the span's ends becomes a slow
         # drift in the windows instead of the circular FFT's jump
-        taper = self._taper(hi - lo)
-        relative, wheel_acc = _tapered_span(self._a_s, self._a_u, lo, hi, taper, np.array(corners))
-        motion, rate = integrate(relative, self.dt, (2, 1), cfg.highpass_hz, cfg.damper_lag_s, step=q)
-        z_u, wheel = integrate(wheel_acc, self.dt, (2, 0), cfg.highpass_hz, step=q)
-        signals = {c: _corner_signal(wheel[row[c]], z_u[row[c]], motion[row[c]], rate[row[c]],
-                                     motion[row[self.partner[c]]], self.parts[c], cfg.min_load_share)
-                   for c in corners}  # fmt: skip
-        kept, delays = [], []
-        for start in starts:
-            at = start - self._first - lo  # the rear window's first sample in the span
-            speed = self._v[lo + at - self.max_shift : lo + at + self.m]
-            mean = float(speed.mean())
-            span_s = speed.size * self.dt
-            if mean < cfg.min_speed_mps or np.ptp(speed) > cfg.max_speed_change_per_s * mean * span_s:
-                skipped += 1
-                continue
-            kept.append(at // q)
-            delays.append(self.wheelbase / mean)
-        if not kept:
-            return
-        rear_at, delay = np.array(kept, dtype=np.int64), np.array(delays)
-        shift = np.rint(delay / dt).astype(np.int64)
-        fronts, rears = [signals[f] for f, _ in self.tracks], [signals[r] for _, r in self.tracks]
-        part, used = windows_moments(fronts, rears, rear_at, rear_at - shift, delay - shift * dt, self.m // q,
-                                     dt=dt, band_hz=cfg.band_hz)  # fmt: skip
+        n = hi - lo
+        taper = self._taper(n)
+        # each corner's relative and wheel accelerations less their means, tapered, zero-padded: one
+        # transform for the two integrals (:func:`integrate`'s, the travel's and its rate from the
+        # first, the wheel's height and its decimated acceleration from the second)
+        size = q * scipy.fft.next_fast_len(-(-n // q), real=True)
+        n_k = self._corners.size
+        acc = np.zeros((2 * n_k, size))
+        _tapered_span(self._a_s, self._a_u, lo, hi, taper, self._corners, acc)
+        spectrum = scipy.fft.rfft(acc, axis=-1)
+        gains = _integration_gains(size, self.dt, (2, 1, 0), cfg.highpass_hz, cfg.damper_lag_s, q)
+        kept = gains.shape[1]
+        product = np.empty((4 * n_k, kept), dtype=complex)
+        np.multiply(spectrum[:, :kept], gains[0], out=product[: 2 * n_k])  # the travels', the heights
+        np.multiply(spectrum[:n_k, :kept], gains[1], out=product[2 * n_k : 3 * n_k])  # the rates
+        np.multiply(spectrum[n_k:, :kept], gains[2], out=product[3 * n_k :])  # the wheels' accelerations
+        series = scipy.fft.irfft(product, n=size // q, axis=-1)[:, : -(-n // q)]
+        motion, z_u, rate, wheel = (series[i * n_k : (i + 1) * n_k] for i in range(4))
+        force, usable = np.empty(motion.shape), np.empty(motion.shape, dtype=bool)
+        _span_forces(wheel, motion, rate, self._partner_rows, self._law_values, self._corner_values,
+                     cfg.min_load_share, force, usable)  # fmt: skip
+        part, used = _rows_moments(z_u, force, usable, self._front_rows, self._rear_rows, rear_at,
+                                   rear_at - shift, delay - shift * dt, self.m // q, dt=dt,
+                                   band_hz=cfg.band_hz)  # fmt: skip
         moments += part
         windows += used
-        skipped += len(kept) - used
+        skipped += rear_at.size - used
 
 
 @cached_njit
-def _tapered_span(a_s, a_u, lo, hi, taper, corners):
-    """Each of `corners`' body and wheel accelerations `a_s`, `a_u` (n, C) over the rows `lo`…`hi`, less
-    their means there, times `taper` (hi − lo,): the wheel's minus the body's and the wheel's, two
-    (K, hi − lo) arrays (m/s²), in one pass (:meth:`ClosureStream._analyse`)."""
+def _tapered_span(a_s, a_u, lo, hi, taper, corners, out):
+    """Each of `corners`' (K,) body and wheel accelerations `a_s`, `a_u` (n, C) over the rows `lo`…`hi`,
+    less their means there, times `taper` (hi − lo,), less the tapered series' mean (:func:`integrate`'s):
+    the wheel's minus the body's into out[:K, :hi − lo], the wheel's into out[K:, :hi − lo] (m/s²), in one
+    pass (:meth:`ClosureStream._analyse`; the rest of `out` (2K, size) is left as it is: the padding)."""
     n = hi - lo
-    relative, wheel = np.empty((corners.size, n)), np.empty((corners.size, n))
-    for i in range(corners.size):
+    n_k = corners.size
+    for i in range(n_k):
         c = corners[i]
         mean_s = mean_u = 0.0
         for j in range(lo, hi):
@@ -705,8 +798,31 @@ def _tapered_span(a_s, a_u, lo, hi, taper, corners):
             mean_u += a_u[j, c]
         mean_s /= n
         mean_u /= n
+        total_r = total_u = 0.0
         for j in range(n):
             u = (a_u[lo + j, c] - mean_u) * taper[j]
-            relative[i, j] = u - (a_s[lo + j, c] - mean_s) * taper[j]
-            wheel[i, j] = u
-    return relative, wheel
+            r = u - (a_s[lo + j, c] - mean_s) * taper[j]
+            out[i, j] = r
+            out[n_k + i, j] = u
+            total_r += r
+            total_u += u
+        total_r /= n
+        total_u /= n
+        for j in range(n):
+            out[i, j] -= total_r
+            out[n_k + i, j] -= total_u
+
+
+@cached_njit
+def _span_forces(wheel, motion, rate, partner, values, corner, min_share, force, usable):
+    """Each of a span's corners' dynamic tyre force `force` and usable samples `usable` (K, n) from its
+    wheel's acceleration, travel about its mean and its rate (K, n), the other corner of its axle at row
+    `partner` (K,), its law's values `values` (K, 13) and (unsprung mass, anti-roll rate, static travel,
+    static load) `corner` (K, 4): :func:`_corner_signal` for all K in one call (the travel's mean the
+    static one less the jacking, :func:`suvtwin.suspension_law.equivalent_spring_rate`)."""
+    for i in range(wheel.shape[0]):
+        s0 = corner[i, 2]
+        mean = _equivalent(values[i], s0, max(_spread(motion[i]), _SIGMA_FLOOR),
+                           max(_spread(rate[i]), _SIGMA_FLOOR))[0]  # fmt: skip
+        _force_balance(wheel[i], motion[i], rate[i], motion[partner[i]], values[i], mean, s0, corner[i, 0],
+                       corner[i, 1], corner[i, 3], min_share, force[i], usable[i])  # fmt: skip
