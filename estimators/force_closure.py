@@ -107,7 +107,8 @@ from suvtwin.suspension_law import (  # the laws' compiled forms, for _force_bal
 
 __all__ = ["MOMENTS", "ClosureFit", "CornerParts", "CornerSignals", "band_of", "closure_objective",
            "closure_weights", "corner_signals", "integrate", "objective_from_moments", "objective_on_grid",
-           "window_moments", "windows_moments", "ClosureBlock", "ClosureConfig", "ClosureStream"]  # fmt: skip
+           "pair_messages", "window_moments", "windows_moments", "ClosureBlock", "ClosureConfig",
+           "ClosureStream"]  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -489,6 +490,44 @@ def objective_on_grid(moments: np.ndarray, weights: tuple[np.ndarray, np.ndarray
     out = np.empty(inv_var.shape[:2])
     _objective_sums(np.ascontiguousarray(x_f), np.ascontiguousarray(x_r), np.ascontiguousarray(inv_var),
                     np.ascontiguousarray(moments, dtype=complex), out)  # fmt: skip
+    return out
+
+
+def pair_messages(ll: np.ndarray, to_fine: np.ndarray) -> np.ndarray:
+    """Each tyre's log-likelihood on its coarse pressure grid with the other tyre's pressure summed out
+    (uniform) on the fine grid: from a track's ℓ (G_f, G_r) on the two coarse grids and the spline
+    `to_fine` (P, G) that takes a coarse grid's values to the fine grid, log Σ_p exp of ℓ's rows (the
+    front's pressures) and columns (the rear's) splined to the fine grid, (2, G) (the online monitor's
+    closure update). Both in one matrix product and one compiled pass (:func:`_log_sums`)."""
+    return _log_sums(np.concatenate([ll, ll.T]) @ to_fine.T).reshape(2, -1)
+
+
+_LOG_SUM_CUT = -50.0
+"""Terms of a log-sum more than this below the row's largest are not taken: each is below 2e-22 of the
+largest, so a thousand of them change the sum (≥ 1 after the shift) by under 1e-18 of it, far below
+its last bit (1.1e-16); they were seven in ten of the exponentials the monitor's closure updates took
+on an hour's varied drive (the log-sums' time halved), and all 757 updates' sums came out the same to
+the bit (on a 300 s run a few differ in the last bit: the monitor's outputs by up to 6e-11 kPa)."""
+
+
+@cached_njit
+def _log_sums(a):
+    """log Σ exp along the last axis of `a` (R, N), each row shifted by its maximum (by 0 where that is not
+    finite), the terms below :data:`_LOG_SUM_CUT` after the shift left out (:func:`pair_messages`)."""
+    n_r, n_n = a.shape
+    out = np.empty(n_r)
+    for i in range(n_r):
+        top = -np.inf
+        for j in range(n_n):
+            top = max(top, a[i, j])
+        if not math.isfinite(top):
+            top = 0.0
+        total = 0.0
+        for j in range(n_n):
+            x = a[i, j] - top
+            if x > _LOG_SUM_CUT:
+                total += math.exp(x)
+        out[i] = top + math.log(total)
     return out
 
 
