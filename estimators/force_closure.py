@@ -507,7 +507,7 @@ _LOG_SUM_CUT = -50.0
 largest, so a thousand of them change the sum (≥ 1 after the shift) by under 1e-18 of it, far below
 its last bit (1.1e-16); they were seven in ten of the exponentials the monitor's closure updates took
 on an hour's varied drive (the log-sums' time halved), and all 757 updates' sums came out the same to
-the bit (on a 300 s run a few differ in the last bit: the monitor's outputs by up to 6e-11 kPa)."""
+the bit (as did the 95 of a 300 s run and three short ones)."""
 
 
 @cached_njit
