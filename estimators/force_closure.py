@@ -794,18 +794,16 @@ class ClosureStream:
         lo = starts[0] - self.max_shift - self.margin - self._first
         hi = starts[-1] + self.m + self.margin - self._first
         # each window's speed over it and the largest delay before it, the windows a half window apart
+        # (those passing: their rear windows' and delayed fronts' first samples in the span, analysed
+        # samples, and the delays' fractions of a sample, s)
         length = self.max_shift + self.m
-        mean, fast = _window_speeds(self._v, starts[0] - self._first - self.max_shift, self.m // 2, length,
-                                    len(starts), cfg.min_speed_mps, cfg.max_speed_change_per_s,
-                                    length * self.dt)  # fmt: skip
-        n_fast = int(fast.sum())
-        skipped += len(starts) - n_fast
-        if n_fast == 0:
+        rear_at, front_at, fraction = _window_speeds(
+            self._v, starts[0] - self._first - self.max_shift, self.m // 2, length, len(starts),
+            cfg.min_speed_mps, cfg.max_speed_change_per_s, length * self.dt, self.wheelbase, dt,
+            (starts[0] - self._first - lo) // q, self.m // 2 // q)  # fmt: skip
+        skipped += len(starts) - rear_at.size
+        if rear_at.size == 0:
             return
-        # the kept rear windows' first samples in the span (analysed samples) and their delays
-        rear_at = (np.asarray(starts, dtype=np.int64)[fast] - self._first - lo) // q
-        delay = self.wheelbase / mean[fast]
-        shift = np.rint(delay / dt).astype(np.int64)
         # the margins tapered (Tukey) to zero: the integrals' error from the span's ends becomes a slow
         # drift in the windows instead of the circular FFT's jump
         n = hi - lo
@@ -828,9 +826,8 @@ class ClosureStream:
         motion, z_u, rate, wheel = (series[i * n_k : (i + 1) * n_k, : force.shape[1]] for i in range(4))
         _span_forces(wheel, motion, rate, self._partner_rows, self._law_values, self._corner_values,
                      cfg.min_load_share, force, usable)  # fmt: skip
-        part, used = _rows_moments(z_u, force, usable, self._front_rows, self._rear_rows, rear_at,
-                                   rear_at - shift, delay - shift * dt, self.m // q, dt=dt,
-                                   band_hz=cfg.band_hz)  # fmt: skip
+        part, used = _rows_moments(z_u, force, usable, self._front_rows, self._rear_rows, rear_at, front_at,
+                                   fraction, self.m // q, dt=dt, band_hz=cfg.band_hz)  # fmt: skip
         moments += part
         windows += used
         skipped += rear_at.size - used
@@ -850,21 +847,32 @@ def _valid_samples(valid, v, a_s, a_u):
 
 
 @cached_njit
-def _window_speeds(v, first, hop, length, n_w, min_speed, max_change, span_s):
-    """Each of `n_w` windows' mean speed (m/s) over `length` samples of `v` from first + w·hop, and whether
-    it passes the speed checks: at least `min_speed`, its range (max − min) at most `max_change` (per s)
-    times the mean times the window's `span_s` (s) (:meth:`ClosureStream._analyse`); the mean numpy's to
-    the bit (:func:`_pairwise_sum`)."""
-    mean, fast = np.empty(n_w), np.empty(n_w, dtype=np.bool_)
+def _window_speeds(v, first, hop, length, n_w, min_speed, max_change, span_s, wheelbase, dt, rear_first,
+                   rear_hop):  # fmt: skip
+    """The speed checks of `n_w` windows (:meth:`ClosureStream._analyse`) and where those passing sit: each
+    window's mean speed over `length` samples of `v` from first + w·hop (numpy's mean to the bit,
+    :func:`_pairwise_sum`) at least `min_speed` (m/s) and its range (max − min) at most `max_change`
+    (per s) times the mean times `span_s` (s); for those, the rear window's first analysed sample
+    rear_first + w·rear_hop, the delayed front's (the delay, `wheelbase` over the mean, in whole
+    analysed samples of `dt` s, rounded), and the delay's remaining fraction (s): three (U,) arrays."""
+    rear_at, front_at, fraction = np.empty(n_w, dtype=np.int64), np.empty(n_w, dtype=np.int64), np.empty(n_w)
+    u = 0
     for w in range(n_w):
         lo = first + w * hop
-        mean[w] = _pairwise_sum(v, lo, length) / length
+        mean = _pairwise_sum(v, lo, length) / length
         top = bottom = v[lo]
         for j in range(lo + 1, lo + length):
             top = max(top, v[j])
             bottom = min(bottom, v[j])
-        fast[w] = not (mean[w] < min_speed or top - bottom > max_change * mean[w] * span_s)
-    return mean, fast
+        if mean < min_speed or top - bottom > max_change * mean * span_s:
+            continue
+        delay = wheelbase / mean
+        shift = np.rint(delay / dt)
+        rear_at[u] = rear_first + w * rear_hop
+        front_at[u] = rear_at[u] - int(shift)
+        fraction[u] = delay - shift * dt
+        u += 1
+    return rear_at[:u], front_at[:u], fraction[:u]
 
 
 @cached_njit
