@@ -188,6 +188,7 @@ from suvtwin.estimators.force_closure import (
     ClosureStream,
     CornerParts,
     objective_on_grid,
+    pair_messages,
 )
 from suvtwin.estimators.full_car import (
     axle_coherence_parts,
@@ -1989,12 +1990,10 @@ class TyreMonitor:
             j_min = float(j.min())
             dof = 2.0 * found.moments.shape[-1] * found.windows[i] / 1.5
             ll = -(j - j_min) / (2.0 * cfg.closure_tempering * max(j_min / dof, 1e-12))
-            marg = post[[f, r]].sum(axis=(1, 2, 3))  # (2, P) the two tyres' marginals
+            marg = np.stack([post[f].sum(axis=(0, 1, 2)), post[r].sum(axis=(0, 1, 2))])  # (2, P) marginals
             marg /= marg.sum(axis=1, keepdims=True)
             # the log-likelihood of each coarse pressure of one tyre, the other's summed out (fine grid)
-            msg_f = _logsumexp(ll @ self._to_fine.T)
-            msg_r = _logsumexp(ll.T @ self._to_fine.T)
-            fine = np.stack([msg_f, msg_r]) @ self._to_fine.T  # (2, P)
+            fine = pair_messages(ll, self._to_fine) @ self._to_fine.T  # (2, P)
             self._take_closure_information([f, r], marg, fine)
             _bayes(post, np.array([f, r], dtype=np.int64), np.ascontiguousarray(fine[:, None, None, :]))
 
