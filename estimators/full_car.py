@@ -328,15 +328,26 @@ def _grid_responses(inv, rows, road_ref, s, delta, j, out):
     and the road's stiffness under wheel w `road_ref[f, w]` (+ δ under the corner's own wheel):
     displacement per unit road elevation, times s for acceleration per road velocity."""
     corner = j - 3
+    n_f = s.size
+    # the parts that do not depend on δ, with s and the other wheels' road stiffness taken in:
+    # a[f, o, w] = s rows[f, o, 3 + w] road_w, b[f, o, w] = s rows[f, o, j] D0⁻¹[j, 3 + w] road_w
+    a = np.empty((n_f, 2, 4), dtype=np.complex128)
+    b = np.empty((n_f, 2, 4), dtype=np.complex128)
+    for f in range(n_f):
+        for o in range(2):
+            for w in range(4):
+                road = 1.0 if w == corner else road_ref[f, w]
+                a[f, o, w] = rows[f, o, 3 + w] * s[f] * road
+                b[f, o, w] = rows[f, o, j] * inv[f, j, 3 + w] * s[f] * road
     for p in range(delta.size):  # in the output's order
         d = delta[p]
-        for f in range(s.size):
+        for f in range(n_f):
             g = d / (1.0 + d * inv[f, j, j])
+            own = road_ref[f, corner] + d
             for o in range(2):
-                rj = rows[f, o, j] * g
                 for w in range(4):
-                    road = road_ref[f, w] + d if w == corner else road_ref[f, w]
-                    out[p, f, o, w] = (rows[f, o, 3 + w] - rj * inv[f, j, 3 + w]) * road * s[f]
+                    x = a[f, o, w] - g * b[f, o, w]
+                    out[p, f, o, w] = x * own if w == corner else x
 
 
 def _with_tyres(car: FullCar, f: npt.ArrayLike, speed_mps: float | None):
