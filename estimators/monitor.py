@@ -34,9 +34,10 @@ together lowers the ideal Cramér–Rao bound a little (``bench/monitor_bound.py
 MuJoCo SUV it turned each corner model's small gain error into a k_t error of the other corners
 and made every tyre worse (docs/monitor.md).
 
-How it runs, every ``update_s`` seconds on the last ``segment_s`` of data (a sliding window,
-rectangular, linear detrend; above ``merge_above_hz`` the periodogram is averaged in bands of
-``merge_width_hz``):
+How it runs, every ``update_s`` seconds (every ``change_update_s`` while a tyre's pressure may be
+changing: its changing regime, item 3, at ``change_update_probability`` or more) on the last
+``segment_s`` of data (a sliding window, rectangular, linear detrend; above ``merge_above_hz`` the
+periodogram is averaged in bands of ``merge_width_hz``):
 
 1. **Checks.** Per corner, a window with a missing value, a saturated (flat-topped) or
    implausible accelerometer, or a spike is skipped; so is a window whose speed is not
@@ -57,9 +58,10 @@ rectangular, linear detrend; above ``merge_above_hz`` the periodogram is average
    integrated out (Laplace, its maximum found by warm-started Fisher scoring, all corners in one
    compiled call, :func:`_window_loglik`): each window may sit on a rougher or smoother stretch
    of road, so a change of roughness is not taken for one of pressure. Windows overlapping by
-   half have periodograms correlated by 1/4 (Welch 1967 [5]_, rectangular window), so the
-   windows' summed score has 1.5 times the variance of independent ones: each window's
-   log-likelihood is weighted by 2/3, which makes the posterior's width the information the data
+   half (4 s updates) have periodograms correlated by 1/4 (Welch 1967 [5]_, rectangular window),
+   so the windows' summed score has 1.5 times the variance of independent ones: each window's
+   log-likelihood is weighted by 2/3 (1 where they do not overlap, 8 s updates; :func:`_overlap_weight`),
+   which makes the posterior's width the information the data
    hold (on the MuJoCo ``warning`` runs the error divided by σ had a std of 1.06 at 10 s and 0.93
    at 30 s; with weight 1/2, each sample counted once, 0.90 and 0.81).
 3. **A Bayesian filter on the grid.** Each corner's state is its posterior on regime ×
