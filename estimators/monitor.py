@@ -267,8 +267,10 @@ class MonitorConfig:
         Interval between updates, s (the window slides by it; segment_s must be a multiple). 8 s: the
         windows do not overlap, and an update's cost is mostly fixed (its window's likelihood on the
         grid, the closure's J and messages, the previews, the prediction), so the cost per second of
-        data is 1.5 times lower than with 4 s (an hour of four corners at 545–586× real time on one
-        core against 357–359×, ``bench/monitor_cost.py``); the estimate is 8 s old at most, not 4 s.
+        data is 1.35–1.5 times lower than with 4 s (``bench/monitor_cost.py``: a varied hour of four
+        corners at 528–594× real time on one core with 8 s updates; on the looped 60 s run the bench
+        used before, 545–586× against 357–359×); the estimate is 8 s old at most, 4 s while a
+        pressure may be changing (``change_update_s``).
         On the ``bench/monitor_mujoco.py`` sets with the radii (4 s in parentheses): ``constant``
         ± 6.54 / 3.36 kPa at 10 / 30 s (± 6.40 / 3.03; the 30 s score reads the 24 s update, not
         the 28 s one), ±2σ 99.5 % (99.5 %); ``drop`` 19 of 20 settled within 15 s, ±2σ 100 %
