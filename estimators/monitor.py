@@ -182,7 +182,7 @@ from dataclasses import asdict, dataclass, field, replace
 import numpy as np
 import numpy.typing as npt
 from scipy.interpolate import CubicSpline
-from scipy.special import ndtr
+from scipy.special import logsumexp, ndtr
 
 from suvtwin.errors import InputError
 from suvtwin.estimators.force_closure import (
@@ -942,27 +942,6 @@ def _bayes(post, rows, fine):
                         post[c, r, d, b, p] = post[c, r, d, b, p] * like[d % f_d, b % f_b, p] * inv
 
 
-@cached_njit
-def _logsumexp(a: np.ndarray) -> np.ndarray:
-    """log Σ exp along the last axis of `a` (R, N), each row shifted by its maximum (by 0 where that is
-    not finite), compiled."""
-    n_r, n_n = a.shape
-    out = np.empty(n_r)
-    for i in range(n_r):
-        top = -np.inf
-        for j in range(n_n):
-            top = max(top, a[i, j])
-        if not math.isfinite(top):
-            top = 0.0
-        total = 0.0
-        for j in range(n_n):
-            x = a[i, j] - top
-            if x > _EXP_ZERO:  # below, exp(x) is 0.0: most of the closure's (J is sharp), skipped
-                total += math.exp(x)
-        out[i] = top + math.log(total)
-    return out
-
-
 @dataclass
 class _Fit:
     """The filter's posterior moments per corner (C of them), from :meth:`TyreMonitor._moments`."""
@@ -1123,7 +1102,7 @@ class TyreMonitor:
         )
         self._prior_var = cfg.prior_sigma_kpa**2
         log_prior = -0.5 * (self._p_grid[None, :] - self._prior[:, None]) ** 2 / self._prior_var
-        self._log_prior = log_prior - _logsumexp(log_prior)[:, None]  # (C, P)
+        self._log_prior = log_prior - logsumexp(log_prior, axis=1)[:, None]  # (C, P)
         n_d = cfg.damping_points
         self._fine = fine
         # each corner's tyre stiffness on the coarse pressure grid (eq. 3–4), N/m
