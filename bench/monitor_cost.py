@@ -11,7 +11,8 @@ hour: about 2 minutes, 2.3 GB). A short run looped again and again (this bench's
 2026-12-05: a 60 s class C run at 90 km/h) flatters the monitor: it meets the same few suspension
 rates and tyre contact shares over and over, so the gain tables it makes for them
 (:meth:`suvtwin.estimators.monitor.TyreMonitor._tables_for`) are made once; on a varied hour they
-are made afresh all along (687 tables for 320 distinct lattice points with 32 kept). A given file
+are made afresh all along (687 tables for 320 distinct lattice points with 32 kept and the rate
+step 2 %; 262 for 215 with 96 kept and 4 %, the defaults since). A given file
 shorter than `minutes` is looped (``looped`` in the output).
 
 The samples are streamed through one four-corner :class:`suvtwin.estimators.monitor.TyreMonitor`
@@ -19,7 +20,8 @@ with time running on, in 10 s chunks, on one core. Printed: the wall time per se
 the first minute and over the last minute, their ratio (the issue asks ≤ 1.2 at one hour; single
 minutes scatter with the machine's load and here with the road, so also the ratio of the medians of
 the last and first five minutes and the spread over all minutes), the real-time factor over the
-whole drive (asks ≥ 500), the state's size at the start and the end (bytes), and the compile time
+whole drive (asks ≥ 500), the state's size at the start and the end (bytes; the gain tables, a cache
+beside it, at the end in ``gain_tables_bytes_end``), and the compile time
 of the first call (excluded from the rates). The machine's speed drifts over minutes (by up to 2.5
 times on the 2-core machine this was written on), so the ratio is also measured with the drift and
 the road taken out: ``next_minute_over_a_fresh_first_minute_interleaved`` is the wall time of the
@@ -213,6 +215,7 @@ def main() -> None:
                   "looped": bool(streamed > n)},
         "state_bytes_start": state_start,
         "state_bytes_end": monitor.state_nbytes + (analysis.state_nbytes if radius else 0),
+        "gain_tables_bytes_end": monitor.gain_tables_nbytes,
         "segments": monitor.counts["segments"],
     }, indent=2))  # fmt: skip
 

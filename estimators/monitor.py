@@ -430,7 +430,10 @@ class MonitorConfig:
         unchanged (with the radii ±6.50 / 3.34 kPa at 10 / 30 s against ±6.54 / 3.36), the 100
         ``warning`` runs 98 % warned against 97 %; at 10 % ±7.02 / 3.45.
     table_slots : int
-        Most gain tables (corner and rate) kept at once; the least recently used is replaced.
+        Most gain tables (corner, rate and contact step) kept at once, 1.1 MB each with the full car;
+        the least recently used is replaced. On a varied hour (bench ``monitor_cost.py``: 215 lattice
+        points met) 32 kept made 490 tables and 96 262 (2.8 ms each), the cache then at most 110 MB
+        (:attr:`TyreMonitor.gain_tables_nbytes`); outputs do not depend on it (identical on that hour).
     damper_distortion : bool
         Add the asymmetric damper's even part (a force b(|v| − E|v|) between body and wheel, at
         sums of the suspension velocity's frequencies, which no linear model holds) to each
@@ -527,7 +530,7 @@ class MonitorConfig:
     observable_sigma_kpa: float = 25.0
     travel_min_hz: float = 1.0
     rate_step: float = 0.04
-    table_slots: int = 32
+    table_slots: int = 96
     max_nonlinear_share: float = 0.20
     nonlinear_taper_from: float = 0.05
     damper_distortion: bool = True
@@ -1255,8 +1258,8 @@ class TyreMonitor:
             n = self._slot_used.size
             idle = np.flatnonzero(self._slot_used[len(self.models):] < self._n_updates) + len(self.models)
             if n < self.config.table_slots or idle.size == 0:
-                slot = n  # grow
-                grow = lambda a: np.concatenate([a, np.empty((8,) + a.shape[1:], a.dtype)])  # noqa: E731
+                slot = n  # grow, doubling (each growth copies the tables made: 1.1 MB each with the full car)
+                grow = lambda a: np.concatenate([a, np.empty((max(8, a.shape[0]),) + a.shape[1:], a.dtype)])  # noqa: E731
                 if n >= self._gain.shape[0]:
                     self._gain = grow(self._gain)
                     self._u11, self._u22, self._u12 = grow(self._u11), grow(self._u22), grow(self._u12)
@@ -1400,6 +1403,14 @@ class TyreMonitor:
         arrays = [s.post, s.buffer_t, s.buffer_v, s.buffer_s, s.buffer_u, s.blocks, s.block_len, s.coh_ab,
                   s.coh_bb, s.coherence, s.coh_prior]  # fmt: skip
         return int(sum(a.nbytes for a in arrays)) + sum(t.state_nbytes for t in self._previews)
+
+    @property
+    def gain_tables_nbytes(self) -> int:
+        """Size of the gain tables made so far, bytes: a cache beside the state (at most ``table_slots``
+        tables besides each corner's own, 1.1 MB each with the full car; remade when dropped)."""
+        arrays = [self._gain, self._u11, self._u22, self._u12, self._along, self._car_a, self._car_b,
+                  self._car_a1, self._car_b1]  # fmt: skip
+        return int(sum(a.nbytes for a in arrays if a is not None))
 
     @property
     def prior_pa(self) -> np.ndarray:
