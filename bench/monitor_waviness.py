@@ -30,7 +30,7 @@ from scipy.stats import norm
 
 from suvtwin.estimators.deflation import DeflationRule
 from suvtwin.pipeline.monitor_scenarios import BenchRun, monitor_traces, scenario_set, simulate_cached
-from suvtwin.pipeline.monitor_scoring import fused_view, score_set
+from suvtwin.pipeline.monitor_scoring import score_set
 from suvtwin.pipeline.monitoring import ROAD_WAVINESS, monitor_run
 from suvtwin.pipeline.scenario import parse_scenario
 
@@ -46,7 +46,8 @@ def with_waviness(run: BenchRun, w: float) -> BenchRun:
 
 def _summary(scores: dict) -> dict:
     out = {}
-    for label, part in (("vibration", scores), ("fused", scores.get("fused"))):
+    # the monitor's estimate (with the radii where fused), and the vibration's own without them
+    for label, part in (("fused", scores), ("vibration", scores.get("vibration_only"))):
         if part is None:
             continue
         out[label] = {
@@ -65,7 +66,7 @@ def would_be_false_warnings(traces) -> dict:
     warned = tyres = 0
     highest = 0.0
     for trace in traces:
-        view = fused_view(trace)
+        view = trace  # the monitor's estimate: with the radii where fused
         with np.errstate(invalid="ignore", divide="ignore"):
             prob = norm.cdf((keep * view.truth_at_est - view.p_hat) / view.sigma)
         prob = np.nan_to_num(prob)

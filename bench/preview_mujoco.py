@@ -8,10 +8,10 @@ corner models and tyre) is fed the measured unsprung and sprung accelerations an
 speed in 1 s chunks (``--memory-s``: the statistics forgotten with that time constant before each);
 at each time T of ``--times`` it gives the rear pressure (i) given the TRUE front
 pressure (σ_f = 0), (ii) given the monitor's front estimate and σ at its last update at or before T
-(:func:`suvtwin.pipeline.monitoring.monitor_run`, columns ``{c}_pressure_hat_kpa``,
-``{c}_pressure_sigma_kpa``), beside (iii) the monitor's own rear estimate, and (iv) both pressures
-fused (:func:`~suvtwin.estimators.preview.fuse_track`: the monitor's front and rear and the preview,
-their errors correlated by ``--correlation``, default the monitor's).
+(:func:`suvtwin.pipeline.monitoring.monitor_run`, columns ``{c}_vibration_pressure_kpa``,
+``{c}_vibration_sigma_kpa``: without the radii), beside (iii) the monitor's own rear estimate, and (iv)
+both pressures fused (:func:`~suvtwin.estimators.preview.fuse_track`: the monitor's front and rear and
+the preview, their errors correlated by ``--correlation``, default the monitor's).
 Errors (estimate − truth, kPa): mean ± std and the share within ±2σ, over all tracks and split by
 the track's dynamic load coefficient (≤ / > ``rough_dlc``, the preview's own, accumulated up to T);
 the preview's rows only where it says it is informative (counted). Cost: wall time of ``add`` per
@@ -125,16 +125,16 @@ def main() -> None:
                     last = mon[mon["t_s"] <= T + 1e-9]
                     if len(last):
                         r = last.iloc[-1]
-                        pf = float(r[f"{front}_pressure_hat_kpa"])
-                        sf = float(r[f"{front}_pressure_sigma_kpa"])
+                        pf = float(r[f"{front}_vibration_pressure_kpa"])
+                        sf = float(r[f"{front}_vibration_sigma_kpa"])
                         lo, hi = config.pressure_range_kpa
                         given = track.conditional(min(max(pf, lo), hi), sf)
                         row["monitor_front"] = {
                             "mean": given.mean_kpa, "sigma": given.sigma_kpa,
                             "informative": given.informative, "slope": given.ridge_slope,
                         }  # fmt: skip
-                        row["monitor_rear"] = {"mean": float(r[f"{rear}_pressure_hat_kpa"]),
-                                               "sigma": float(r[f"{rear}_pressure_sigma_kpa"])}  # fmt: skip
+                        row["monitor_rear"] = {"mean": float(r[f"{rear}_vibration_pressure_kpa"]),
+                                               "sigma": float(r[f"{rear}_vibration_sigma_kpa"])}  # fmt: skip
                         row["monitor_front_own"] = {"mean": pf, "sigma": sf}
                         pr, sr = row["monitor_rear"]["mean"], row["monitor_rear"]["sigma"]
                         if given.informative and sr > 0:

@@ -540,10 +540,10 @@ def monitor_command(
     ],
     out: Annotated[
         Path,
-        typer.Option("--out", help="Output Parquet: one row per update (every 8 s), per tyre the pressure, "
-                     "its σ, 5 % and 95 % quantiles, flags, the warning's reference, probability and state, "
-                     "the radius analysis and the pressure fused with it; the car's common-loss "
-                     "probability."),
+        typer.Option("--out", help="Output Parquet: one row per update (every 8 s), per tyre the pressure "
+                     "(with the wheels' radii where they are), its σ, 5 % and 95 % quantiles, flags, the "
+                     "vibration's own estimate, the warning's reference, probability and state, the radius "
+                     "analysis; the car's common-loss probability."),
     ],
     placard: Annotated[
         float | None,
@@ -623,8 +623,10 @@ def monitor_command(
         now = "no estimate yet" if last is None else (
             f"{last[f'{c}_pressure_hat_kpa']:.1f} ± {last[f'{c}_pressure_sigma_kpa']:.1f} kPa"
             + ("" if last[f"{c}_observable"] else f" (not observable{_skipped(result.metadata, c)})")
-            + (f", with the radii {last[f'{c}_fused_pressure_kpa']:.1f} ± {last[f'{c}_fused_sigma_kpa']:.1f}"
-               if math.isfinite(last.get(f"{c}_fused_pressure_kpa", math.nan)) else "")
+            + (f" with the radii; the vibration alone {last[f'{c}_vibration_pressure_kpa']:.1f} ± "
+               f"{last[f'{c}_vibration_sigma_kpa']:.1f}"
+               + ("" if last[f"{c}_vibration_observable"] else " (not observable)")
+               if last[f"{c}_with_radii"] else "")
         )  # fmt: skip
         note = "" if warned is None else (
             f"; WARNING at {warned['t_s']:.1f} s (P = {warned['loss_probability']:.3f}"

@@ -40,6 +40,7 @@ __all__ = [
     "settle_time",
     "truth_at",
     "warning_detection",
+    "vibration_view",
     "warning_times",
 ]
 
@@ -51,14 +52,16 @@ class MonitorTrace:
     Attributes
     ----------
     t_s : (T,) run time axis; truth_kpa : (T, 4) true pressures; speed_mps : (T,) vehicle speed.
-    t_est : (K,) monitor update times; p_hat, sigma : (K, 4) estimate and its 1σ;
-    observable, warning : (K, 4) bool flags (warning latched or not);
+    t_est : (K,) monitor update times; p_hat, sigma : (K, 4) estimate and its 1σ (the monitor's best:
+    with the wheels' radii where fused); observable, warning : (K, 4) bool flags (warning latched or not);
     loss_probability : (K, 4) or None, the warning's probability of a loss at each update;
     common_probability : (K,) or None, the probability of the car's common loss (NaN where not taken).
     fused_hat, fused_sigma : (K, 4) or None, the pressure fused with the radius analysis and its σ
     (NaN where not fused); relative_probability : (K, 4) or None, the radii's probability that the
     tyre lost more than the others since their calibration (learned references; NaN before).
     track_coherence : (K,) or None, the left and right tracks' road coherence the monitor used.
+    vibration_hat, vibration_sigma, vibration_observable : (K, 4) or None, the vibration's own estimate
+    (without the radii), its σ and flag (:func:`vibration_view`).
     """
 
     t_s: np.ndarray
@@ -75,6 +78,9 @@ class MonitorTrace:
     fused_sigma: np.ndarray | None = None
     relative_probability: np.ndarray | None = None
     track_coherence: np.ndarray | None = None
+    vibration_hat: np.ndarray | None = None
+    vibration_sigma: np.ndarray | None = None
+    vibration_observable: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         T, K = np.shape(self.t_s)[0], np.shape(self.t_est)[0]
@@ -82,7 +88,9 @@ class MonitorTrace:
                             ("sigma", (K, 4)), ("observable", (K, 4)), ("warning", (K, 4)),
                             ("loss_probability", (K, 4)), ("common_probability", (K,)),
                             ("fused_hat", (K, 4)), ("fused_sigma", (K, 4)),
-                            ("relative_probability", (K, 4)), ("track_coherence", (K,))):  # fmt: skip
+                            ("relative_probability", (K, 4)), ("track_coherence", (K,)),
+                            ("vibration_hat", (K, 4)), ("vibration_sigma", (K, 4)),
+                            ("vibration_observable", (K, 4))):  # fmt: skip
             if getattr(self, name) is None:
                 continue
             got = np.shape(getattr(self, name))
@@ -110,8 +118,8 @@ class MonitorTrace:
 def monitor_trace(run: Mapping, monitor: Mapping) -> MonitorTrace:
     """A :class:`MonitorTrace` from a run's table (``t_s``, ``speed_mps``, ``{c}_pressure_kpa``) and a
     monitor's table (``t_s``, ``{c}_pressure_hat_kpa``, ``{c}_pressure_sigma_kpa``,
-    ``{c}_observable``, ``{c}_warning``; ``{c}_loss_probability`` if there): DataFrames or mappings
-    of arrays."""
+    ``{c}_observable``, ``{c}_warning``; ``{c}_loss_probability``, the fusion's and the vibration's own
+    columns if there): DataFrames or mappings of arrays."""
 
     def col(table: Mapping, name: str, what: str) -> np.ndarray:
         try:
@@ -123,6 +131,8 @@ def monitor_trace(run: Mapping, monitor: Mapping) -> MonitorTrace:
         return np.stack([col(table, f"{c}_{suffix}", what) for c in CORNERS], axis=1).astype(dtype)
 
     fused = all(f"{c}_fused_pressure_kpa" in monitor and f"{c}_fused_sigma_kpa" in monitor for c in CORNERS)
+    vibration = all(f"{c}_vibration_{k}" in monitor for c in CORNERS for k in ("pressure_kpa", "sigma_kpa",
+                                                                                  "observable"))  # fmt: skip
     return MonitorTrace(
         t_s=col(run, "t_s", "run").astype(float),
         truth_kpa=per_tyre(run, "pressure_kpa", "run"),
@@ -154,17 +164,20 @@ def monitor_trace(run: Mapping, monitor: Mapping) -> MonitorTrace:
             if "track_coherence_hat" in monitor
             else None
         ),
+        vibration_hat=per_tyre(monitor, "vibration_pressure_kpa", "monitor") if vibration else None,
+        vibration_sigma=per_tyre(monitor, "vibration_sigma_kpa", "monitor") if vibration else None,
+        vibration_observable=(per_tyre(monitor, "vibration_observable", "monitor", bool) if vibration
+                              else None),
     )
 
 
-def fused_view(trace: MonitorTrace) -> MonitorTrace:
-    """The trace with the pressure fused with the radius analysis as its estimate and σ, where fused
-    (the monitor's own elsewhere)."""
-    if trace.fused_hat is None or trace.fused_sigma is None:
+def vibration_view(trace: MonitorTrace) -> MonitorTrace:
+    """The trace with the vibration's own estimate (without the wheels' radii), its σ and observable flag
+    as its estimate, where the trace has them (else the trace as it is)."""
+    if trace.vibration_hat is None or trace.vibration_sigma is None or trace.vibration_observable is None:
         return trace
-    here = np.isfinite(trace.fused_hat) & np.isfinite(trace.fused_sigma)
-    p_hat = np.where(here, trace.fused_hat, trace.p_hat)
-    return replace(trace, p_hat=p_hat, sigma=np.where(here, trace.fused_sigma, trace.sigma))
+    return replace(trace, p_hat=trace.vibration_hat, sigma=trace.vibration_sigma,
+                   observable=trace.vibration_observable)  # fmt: skip
 
 
 def truth_at(t_s: np.ndarray, truth: np.ndarray, t_est: np.ndarray) -> np.ndarray:
@@ -501,7 +514,6 @@ def false_warnings(
     minutes = float(sum(tr.duration_s for tr in traces) / 60.0)
     events = []
     for i, tr in enumerate(traces):
-        tr = fused_view(tr)  # the estimate the warning decided on
         w = np.asarray(tr.warning, bool)
         rise = w & ~np.vstack([np.zeros((1, w.shape[1]), bool), w[:-1]])
         for k, c in zip(*np.nonzero(rise), strict=True):
@@ -520,9 +532,11 @@ def false_warnings(
         "events": events,
     }
     if traces and all(tr.loss_probability is not None for tr in traces):
-        # the rule counts an update where the tyre is observable or its estimate fused with the radii
+        # the rule counts an update where the tyre is observable by the vibration or its estimate fused
+        # with the radii
         counted = [
-            np.asarray(tr.observable, bool) | (False if tr.fused_hat is None else np.isfinite(tr.fused_hat))
+            np.asarray(vibration_view(tr).observable, bool)
+            | (False if tr.fused_hat is None else np.isfinite(tr.fused_hat))
             for tr in traces
         ]
         probs = [np.where(c, np.nan_to_num(tr.loss_probability, nan=0.0), 0.0)
@@ -585,21 +599,22 @@ def score_set(
     out["error_at_by_tyre"] = {
         c: {f"{at:g}s": errors_at(traces, at, tyre=c) for at in (10.0, 30.0)} for c in CORNERS
     }
-    fused_any = traces and all(t.fused_hat is not None for t in traces)
+    fused_any = traces and all(t.fused_hat is not None and t.vibration_hat is not None for t in traces)
     if fused_any and any(np.isfinite(t.fused_hat).any() for t in traces):
-        # the same with the radius analysis fused in (the estimate the warning decides on)
-        fused = [fused_view(t) for t in traces]
-        out["fused"] = {
-            "error_at": {f"{at:g}s": errors_at(fused, at) for at in (10.0, 30.0)},
+        # the same on the vibration's own estimate, without the radii
+        own = [vibration_view(t) for t in traces]
+        out["vibration_only"] = {
+            "error_at": {f"{at:g}s": errors_at(own, at) for at in (10.0, 30.0)},
             "error_at_observable": {
-                f"{at:g}s": errors_at(fused, at, observable_only=True) for at in (10.0, 30.0)
+                f"{at:g}s": errors_at(own, at, observable_only=True) for at in (10.0, 30.0)
             },
-            "coverage": coverage(fused, k=2.0, after_s=2.0),
+            "coverage": coverage(own, k=2.0, after_s=2.0),
         }
         if set_name in ("slow_leak", "drop"):
-            out["fused"]["change"] = change_tracking(fused, [i["change"] for i in infos], tol_kpa=tol_kpa)
+            out["vibration_only"]["change"] = change_tracking(own, [i["change"] for i in infos],
+                                                              tol_kpa=tol_kpa)
         elif set_name == "low_speed":
-            out["fused"]["low_speed"] = low_speed_shares(fused, tol_kpa=tol_kpa)
+            out["vibration_only"]["low_speed"] = low_speed_shares(own, tol_kpa=tol_kpa)
     classes = [i.get("road_class") for i in infos]
     if all(isinstance(c, str) for c in classes) and traces:
         out["by_class"] = {}
@@ -616,7 +631,7 @@ def score_set(
         out["low_speed"] = low_speed_shares(traces, tol_kpa=tol_kpa)
     elif set_name in ("warning", "warning_multi"):
         out["warning"] = warning_detection(
-            [fused_view(t) for t in traces],  # a miss's estimate and σ: what the warning decided on
+            traces,  # a miss's estimate and σ: the best, what the warning decided on
             [i["deflated"] for i in infos],
             window_s=60.0,
             names=[str(i.get("name", k)) for k, i in enumerate(infos)],
@@ -641,7 +656,7 @@ def score_set(
         deflated = [i["deflated"] for i in infos]
         ends, starts = [i["change"]["end_s"] for i in infos], [i["change"]["start_s"] for i in infos]
         out["warning"] = warning_detection(
-            [fused_view(t) for t in traces], deflated, window_s=60.0,
+            traces, deflated, window_s=60.0,
             names=[str(i.get("name", k)) for k, i in enumerate(infos)],
             classes=classes if all(isinstance(c, str) for c in classes) else None,
             from_s=ends, loss_start_s=starts,
@@ -676,11 +691,11 @@ def _target(value, op: str, bound: float) -> dict:
 
 def issue_targets(set_name: str, scores: dict) -> dict:
     """The issue's 'done when' numbers for this set, with the measured value and whether it is met:
-    on the vibration monitor's estimate and, where the scores have a ``fused`` block (the radii fused
-    in), on that too (``with_radii``)."""
+    on the monitor's estimate (its best: with the wheels' radii where fused) and, where the scores have
+    a ``vibration_only`` block, on the vibration's own estimate too (``vibration_only``)."""
     out = _targets(set_name, scores)
-    if "fused" in scores and set_name in ("constant", "slow_leak", "drop", "low_speed"):
-        out["with_radii"] = _targets(set_name, {**scores, **scores["fused"]})
+    if "vibration_only" in scores and set_name in ("constant", "slow_leak", "drop", "low_speed"):
+        out["vibration_only"] = _targets(set_name, {**scores, **scores["vibration_only"]})
     return out
 
 

@@ -158,7 +158,7 @@ def test_report_is_self_contained_with_goals_and_figures(finished):
     monitor = json.loads((out / "monitor.json").read_text())
     assert set(monitor) == {"slow_leak", "warning"}
     assert monitor["slow_leak"]["scores"]["runs"] == 1 and "settle_s_max" in monitor["slow_leak"]["targets"]
-    assert "settle_s_max" in monitor["slow_leak"]["targets"]["with_radii"]  # the radii fused in
+    assert "settle_s_max" in monitor["slow_leak"]["targets"]["vibration_only"]  # without the radii too
     assert monitor["warning"]["targets"]["detected_within_60s"]["value"] in (0.0, 1.0)
     assert monitor["warning"]["scores"]["warning"]["telltale"]["detected"] in (0.0, 1.0)
     assert "low-pressure telltale" in page

@@ -33,7 +33,9 @@ def test_monitor_writes_every_tyre_and_warns_against_a_placard(run_file, tmp_pat
     np.testing.assert_allclose(frame["t_s"], np.arange(1, n_updates + 1) * every - 1e-3)
     for c in ("fl", "fr", "rl", "rr"):
         for col in ("pressure_hat_kpa", "pressure_sigma_kpa", "pressure_lower_kpa", "pressure_upper_kpa",
-                    "observable", "status", "reference_kpa", "loss_probability", "warning"):  # fmt: skip
+                    "observable", "with_radii", "vibration_pressure_kpa", "vibration_sigma_kpa",
+                    "vibration_lower_kpa", "vibration_upper_kpa", "vibration_observable", "status",
+                    "reference_kpa", "loss_probability", "warning"):  # fmt: skip
             assert f"{c}_{col}" in frame
         # the 90 % interval holds the estimate, and is no wider than ±1.645 σ by much (a skirt narrows
         # the core; the grid's bounds can skew it)
@@ -43,7 +45,14 @@ def test_monitor_writes_every_tyre_and_warns_against_a_placard(run_file, tmp_pat
         assert (frame[f"{c}_reference_kpa"] == 250.0).all()
         # four equal tyres: the radius analysis finds no tyre apart (the loads' own part, < 0.5 ‰, aside)
         assert (frame[f"{c}_radius_excess_permille"].abs() < 0.5).all()
-        assert (frame[f"{c}_fused_sigma_kpa"] < frame[f"{c}_pressure_sigma_kpa"]).all()
+        assert (frame[f"{c}_fused_sigma_kpa"] < frame[f"{c}_vibration_sigma_kpa"]).all()
+        # the estimate reported is the best: fused with the radii where they are (every update here)
+        assert frame[f"{c}_with_radii"].all()
+        np.testing.assert_array_equal(frame[f"{c}_pressure_hat_kpa"], frame[f"{c}_fused_pressure_kpa"])
+        np.testing.assert_array_equal(frame[f"{c}_pressure_sigma_kpa"], frame[f"{c}_fused_sigma_kpa"])
+        # the vibration's own interval likewise holds its estimate
+        lower, hat, upper = (frame[f"{c}_vibration_{k}"] for k in ("lower_kpa", "pressure_kpa", "upper_kpa"))
+        assert (lower < hat).all() and (hat < upper).all()
     meta = json.loads(table.schema.metadata[b"suvtwin.monitor"])
     assert meta["placard_kpa"] == 250.0 and meta["segments"] == n_updates
     # the force closure ran: the simulator's half step told it as the damper's timing, windows counted
@@ -267,12 +276,14 @@ def test_a_stop_reversing_and_speed_spikes_are_skipped_windows_not_a_refused_run
     assert all(status["speed"][c] == skipped for c in ("fl", "fr", "rl", "rr")), status
     assert (frame["fl_status"] == "speed").sum() == skipped
     for c in ("fl", "fr", "rl", "rr"):
-        hat, sigma = frame[f"{c}_pressure_hat_kpa"], frame[f"{c}_pressure_sigma_kpa"]
+        hat, sigma = frame[f"{c}_vibration_pressure_kpa"], frame[f"{c}_vibration_sigma_kpa"]
         assert np.isfinite(hat).all() and np.isfinite(sigma).all()
-        # with one window of data, each tyre holds the truth (180 kPa) within 3σ, and is no better
-        # informed than with the whole run
+        # with one window of data, each tyre's vibration estimate holds the truth (180 kPa) within 3σ,
+        # and is no better informed than with the whole run; so does the estimate with the radii
         assert abs(hat.iloc[-1] - 180.0) < 3 * sigma.iloc[-1]
-        assert sigma.iloc[-1] >= base[f"{c}_pressure_sigma_kpa"].iloc[-1]
+        assert sigma.iloc[-1] >= base[f"{c}_vibration_sigma_kpa"].iloc[-1]
+        best, best_sigma = frame[f"{c}_pressure_hat_kpa"].iloc[-1], frame[f"{c}_pressure_sigma_kpa"].iloc[-1]
+        assert abs(best - 180.0) < 3 * best_sigma
 
 
 @pytest.mark.parametrize(
@@ -347,12 +358,15 @@ def test_one_dead_accelerometer_leaves_the_four_wheels_radius_analysis(run_file,
     frame.to_parquet(dead)
     assert main(["monitor", str(dead), "--out", str(out)]) == 0
     got = pq.read_table(out).to_pandas()
-    assert (got["rl_status"] == "gap").all() and not got["rl_observable"].any()
+    assert (got["rl_status"] == "gap").all() and not got["rl_vibration_observable"].any()
     for c in ("fl", "fr", "rl", "rr"):
         fused, sigma = got[f"{c}_fused_pressure_kpa"], got[f"{c}_fused_sigma_kpa"]
         assert np.isfinite(fused).all() and (np.abs(fused - 180.0) < 3 * sigma).all()
     # the dead tyre's pressure comes from the radii against the others: far narrower than its prior
-    assert got["rl_fused_sigma_kpa"].iloc[-1] < 0.5 * got["rl_pressure_sigma_kpa"].iloc[-1]
+    assert got["rl_fused_sigma_kpa"].iloc[-1] < 0.5 * got["rl_vibration_sigma_kpa"].iloc[-1]
+    # and the estimate reported is that one
+    assert got["rl_with_radii"].all()
+    assert got["rl_pressure_sigma_kpa"].iloc[-1] == got["rl_fused_sigma_kpa"].iloc[-1]
 
 
 def test_the_stream_s_interval_is_the_same_from_a_cut_record_and_the_whole_one():
@@ -516,14 +530,15 @@ def test_a_dead_wheel_speed_sensor_leaves_the_radius_analysis_on_the_other_three
         got = pq.read_table(tmp_path / "m.parquet")
         frame = got.to_pandas()
         for c in ("fl", "fr", "rl", "rr"):
-            np.testing.assert_array_equal(frame[f"{c}_pressure_hat_kpa"], ref[f"{c}_pressure_hat_kpa"])
+            own = f"{c}_vibration_pressure_kpa"
+            np.testing.assert_array_equal(frame[own], ref[own])
             assert np.isfinite(frame[f"{c}_fused_pressure_kpa"]).all()
             assert np.isnan(frame["rl_radius_excess_permille"]).all()
         for c in ("fl", "fr", "rr"):
             fused = f"{c}_fused_pressure_kpa"
             np.testing.assert_allclose(frame[fused], ref[fused], atol=3.0)
         # the silent tyre: no radius of its own, so its σ is about its vibration σ, not the fused one's
-        assert np.all(frame["rl_fused_sigma_kpa"] >= 0.8 * frame["rl_pressure_sigma_kpa"])
+        assert np.all(frame["rl_fused_sigma_kpa"] >= 0.8 * frame["rl_vibration_sigma_kpa"])
         assert np.all(frame["rl_fused_sigma_kpa"] > ref["rl_fused_sigma_kpa"])
         silent = json.loads(got.schema.metadata[b"suvtwin.monitor"])["radius"]["silent_wheel_samples"]
         assert silent["rl"] >= 0.9 * table.num_rows and silent["fl"] == silent["fr"] == silent["rr"] == 0

@@ -204,9 +204,9 @@ def _monitor_html(monitor: dict) -> list[str]:
     ]
     rows = []
     for name, study in monitor.items():
-        # the vibration estimate's targets, then the same with the wheels' radii fused in (with_radii)
-        cells = [(t, c) for t, c in study["targets"].items() if t != "with_radii"]
-        cells += [(f"with the radii: {t}", c) for t, c in study["targets"].get("with_radii", {}).items()]
+        # the monitor's estimate's targets (with the wheels' radii where fused), then the vibration's own
+        cells = [(t, c) for t, c in study["targets"].items() if t != "vibration_only"]
+        cells += [(f"the vibration alone: {t}", c) for t, c in study["targets"].get("vibration_only", {}).items()]
         for target, cell in cells:
             value = cell["value"]
             rows.append({"set": name, "target": target, "value": "—" if value is None else value,
