@@ -7,7 +7,7 @@ The default input is a drive as varied as a real one, `minutes` long (default 60
 ``nominal_long``'s first run stretched to that length (:func:`suvtwin.pipeline.monitor_scenarios.scenario_set`
 with ``duration_s``: roads of classes A–D in segments anywhere in their bands, the speed changing
 between 30 and 130 km/h, a load aboard), simulated here once and kept in ``bench/_runs/cost`` (an
-hour: about 2 minutes, 2.3 GB). A short run looped again and again (this bench's input until
+hour: about 2 minutes, 2.5 GB with LZ4). A short run looped again and again (this bench's input until
 2026-12-05: a 60 s class C run at 90 km/h) flatters the monitor: it meets the same few suspension
 rates and tyre contact shares over and over, so the gain tables it makes for them
 (:meth:`suvtwin.estimators.monitor.TyreMonitor._tables_for`) are made once; on a varied hour they
