@@ -514,18 +514,19 @@ def monitor_run(
     )  # fmt: skip
     best = best_estimate(update, warn if evidence is not None else None, config.observable_sigma_kpa)
     columns: dict[str, np.ndarray] = {"t_s": update.t_s, "speed_mps": update.speed_mps}
+    per_tyre = {  # (K, C) each: the estimate reported, then the vibration's own
+        "pressure_hat_kpa": best.pressure_kpa, "pressure_sigma_kpa": best.sigma_kpa,
+        "pressure_lower_kpa": best.lower_kpa, "pressure_upper_kpa": best.upper_kpa,
+        "observable": best.observable, "with_radii": best.with_radii,
+        "vibration_pressure_kpa": update.pressure_pa / 1e3,
+        "vibration_sigma_kpa": update.pressure_sigma_pa / 1e3,
+        "vibration_lower_kpa": update.pressure_lower_pa / 1e3,
+        "vibration_upper_kpa": update.pressure_upper_pa / 1e3,
+        "vibration_observable": update.observable,
+    }  # fmt: skip
     for i, c in enumerate(corners):
-        columns[f"{c}_pressure_hat_kpa"] = best.pressure_kpa[:, i]
-        columns[f"{c}_pressure_sigma_kpa"] = best.sigma_kpa[:, i]
-        columns[f"{c}_pressure_lower_kpa"] = best.lower_kpa[:, i]
-        columns[f"{c}_pressure_upper_kpa"] = best.upper_kpa[:, i]
-        columns[f"{c}_observable"] = best.observable[:, i]
-        columns[f"{c}_with_radii"] = best.with_radii[:, i]
-        columns[f"{c}_vibration_pressure_kpa"] = update.pressure_pa[:, i] / 1e3
-        columns[f"{c}_vibration_sigma_kpa"] = update.pressure_sigma_pa[:, i] / 1e3
-        columns[f"{c}_vibration_lower_kpa"] = update.pressure_lower_pa[:, i] / 1e3
-        columns[f"{c}_vibration_upper_kpa"] = update.pressure_upper_pa[:, i] / 1e3
-        columns[f"{c}_vibration_observable"] = update.observable[:, i]
+        for name, values in per_tyre.items():
+            columns[f"{c}_{name}"] = values[:, i]
         columns[f"{c}_status"] = np.array(SKIP_REASONS)[update.status[:, i]]
         columns[f"{c}_reference_kpa"] = warn.reference_kpa[:, i]
         columns[f"{c}_loss_probability"] = warn.probability[:, i]
