@@ -26,7 +26,8 @@ once monitored (a run takes ~0.8 MB per simulated second). The monitor
 (:func:`suvtwin.pipeline.monitoring.monitor_run`) gets each run file and, for the ``warning``,
 ``warning_multi`` and ``nominal_long`` sets, the run's placard pressure (``--reset-at S``: a driver
 reset at S s instead). Scored (:func:`suvtwin.pipeline.monitor_scoring.score_set`) against the run's true
-pressures, beside the issue's targets; also the simulation and monitor throughput (driving s
+pressures, beside the issue's targets: the estimate the monitor reports (with the wheels' radii where
+fused) and, in ``vibration_only``, the vibration's own; also the simulation and monitor throughput (driving s
 per wall s; the monitor's includes reading the file and, on its first run per process, JIT
 compilation), runs whose simulation diverged (left out of the scores), and what the car went
 through: runs that left their lane or lost wheel contact, and how far the weave runs of
