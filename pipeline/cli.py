@@ -622,8 +622,9 @@ def monitor_command(
         warned = result.metadata["warnings"][c]
         now = "no estimate yet" if last is None else (
             f"{last[f'{c}_pressure_hat_kpa']:.1f} ± {last[f'{c}_pressure_sigma_kpa']:.1f} kPa"
+            + (" with the radii" if last[f"{c}_with_radii"] else "")
             + ("" if last[f"{c}_observable"] else f" (not observable{_skipped(result.metadata, c)})")
-            + (f" with the radii; the vibration alone {last[f'{c}_vibration_pressure_kpa']:.1f} ± "
+            + (f"; the vibration alone {last[f'{c}_vibration_pressure_kpa']:.1f} ± "
                f"{last[f'{c}_vibration_sigma_kpa']:.1f}"
                + ("" if last[f"{c}_vibration_observable"] else " (not observable)")
                if last[f"{c}_with_radii"] else "")

@@ -39,8 +39,8 @@ __all__ = [
     "score_set",
     "settle_time",
     "truth_at",
-    "warning_detection",
     "vibration_view",
+    "warning_detection",
     "warning_times",
 ]
 

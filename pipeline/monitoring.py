@@ -48,9 +48,9 @@ from suvtwin.pipeline.estimation import (
 from suvtwin.tire_stiffness import tire_stiffness_of
 
 __all__ = [
-    "CORNER_MODELS", "MonitorResult", "RADIUS_COLUMNS", "RADIUS_OPTIONAL_COLUMNS", "RADIUS_WHEEL_COLUMNS",
-    "ROAD_WAVINESS",
-    "corner_models", "monitor_run", "monitor_signals", "radius_evidence", "tyre_load_share",
+    "CORNER_MODELS", "BestEstimate", "MonitorResult", "RADIUS_COLUMNS", "RADIUS_OPTIONAL_COLUMNS",
+    "RADIUS_WHEEL_COLUMNS", "ROAD_WAVINESS",
+    "best_estimate", "corner_models", "monitor_run", "monitor_signals", "radius_evidence", "tyre_load_share",
     "wheel_positions", "write_monitor",
 ]  # fmt: skip
 
