@@ -577,3 +577,35 @@ def test_the_update_interval_is_an_option_and_a_bad_one_is_named(run_file, tmp_p
     said = capsys.readouterr().err
     assert "--update-s" in said and "segment_s a multiple of it" in said
     assert not bad.exists()
+
+
+def test_the_reported_estimate_is_the_fused_one_where_there_is_one_else_the_vibration_s():
+    # best_estimate: per update and tyre, the fusion with the radii where it has a value, else the
+    # vibration's own; the fused estimate's 5 % / 95 % quantiles are the normal's, its observable flag
+    # its σ within the limit
+    from types import SimpleNamespace
+
+    from suvtwin.pipeline.monitoring import best_estimate
+
+    nan = np.nan
+    update = SimpleNamespace(
+        pressure_pa=np.array([[200e3, 210e3], [190e3, 205e3]]),
+        pressure_sigma_pa=np.array([[40e3, 5e3], [8e3, 4e3]]),
+        pressure_lower_pa=np.array([[150e3, 202e3], [178e3, 199e3]]),
+        pressure_upper_pa=np.array([[260e3, 218e3], [203e3, 211e3]]),
+        observable=np.array([[False, True], [True, True]]),
+    )  # fmt: skip
+    warn = SimpleNamespace(fused_kpa=np.array([[nan, 208.0], [185.0, nan]]),
+                           fused_sigma_kpa=np.array([[nan, 3.0], [30.0, nan]]))  # fmt: skip
+    best = best_estimate(update, warn, observable_sigma_kpa=25.0)
+    assert best.with_radii.tolist() == [[False, True], [True, False]]
+    np.testing.assert_array_equal(best.pressure_kpa, [[200.0, 208.0], [185.0, 205.0]])
+    np.testing.assert_array_equal(best.sigma_kpa, [[40.0, 3.0], [30.0, 4.0]])
+    z95 = 1.6448536  # the normal's 95 % point
+    np.testing.assert_allclose(best.lower_kpa, [[150.0, 208.0 - z95 * 3.0], [185.0 - z95 * 30.0, 199.0]])
+    np.testing.assert_allclose(best.upper_kpa, [[260.0, 208.0 + z95 * 3.0], [185.0 + z95 * 30.0, 211.0]])
+    assert best.observable.tolist() == [[False, True], [False, True]]
+    # no radius analysis: the vibration's own throughout
+    alone = best_estimate(update, None)
+    np.testing.assert_array_equal(alone.pressure_kpa, update.pressure_pa / 1e3)
+    assert not alone.with_radii.any() and alone.observable.tolist() == update.observable.tolist()

@@ -17,11 +17,13 @@ from suvtwin.pipeline.monitor_scoring import (
     driving_time,
     errors_at,
     false_warnings,
+    issue_targets,
     low_speed_shares,
     monitor_trace,
     score_set,
     settle_time,
     truth_at,
+    vibration_view,
     warning_detection,
     warning_times,
 )
@@ -325,3 +327,30 @@ def test_false_warnings_margin_of_the_common_loss():
     best = false_warnings([run], ["a"])["max_held_common_probability"]
     assert best == {"probability": pytest.approx(0.4), "run": "a", "t_s": 12.0}
     assert "max_held_common_probability" not in false_warnings([_trace(t_s, 200.0, t_est, 200.0)])
+
+
+def test_the_scores_are_the_reported_estimate_s_and_the_vibration_s_own_beside():
+    # the monitor reports its best estimate (with the radii) and writes the vibration's own beside it:
+    # the set's scores and targets are the reported one's, vibration_only the vibration's
+    run = {"t_s": [0.0, 10.0, 30.0], "speed_mps": [20.0] * 3}
+    run |= {f"{c}_pressure_kpa": [200.0] * 3 for c in ("fl", "fr", "rl", "rr")}
+    mon = {"t_s": [10.0, 30.0]}
+    for c in ("fl", "fr", "rl", "rr"):
+        mon |= {f"{c}_pressure_hat_kpa": [202.0, 201.0], f"{c}_pressure_sigma_kpa": [2.0, 1.0],
+                f"{c}_observable": [True, True], f"{c}_warning": [False, False],
+                f"{c}_fused_pressure_kpa": [202.0, 201.0], f"{c}_fused_sigma_kpa": [2.0, 1.0],
+                f"{c}_vibration_pressure_kpa": [220.0, 190.0], f"{c}_vibration_sigma_kpa": [30.0, 4.0],
+                f"{c}_vibration_observable": [False, True]}  # fmt: skip
+    trace = monitor_trace(run, mon)
+    own = vibration_view(trace)
+    assert own.p_hat[:, 0].tolist() == [220.0, 190.0] and own.observable[:, 0].tolist() == [False, True]
+    out = score_set("constant", [trace], [{"road_class": "B"}])
+    assert out["error_at"]["10s"]["mean_kpa"] == pytest.approx(2.0)
+    assert out["vibration_only"]["error_at"]["10s"]["mean_kpa"] == pytest.approx(20.0)
+    assert out["vibration_only"]["error_at"]["30s"]["mean_kpa"] == pytest.approx(-10.0)
+    targets = issue_targets("constant", out)
+    assert targets["abs_mean_error_10s_kpa"]["met"]
+    assert not targets["vibration_only"]["abs_mean_error_10s_kpa"]["met"]
+    # a table without the vibration's columns (a monitor run without the radii): no vibration_only block
+    plain = {k: v for k, v in mon.items() if "vibration" not in k}
+    assert "vibration_only" not in score_set("constant", [monitor_trace(run, plain)], [{"road_class": "B"}])
