@@ -82,18 +82,16 @@ FILE_FAULTS = {"dead_yaw_rate": "yaw_rate_radps", "dead_lat_accel": "lat_accel_m
 
 
 def _fused_scores(path, t, truth):
-    """The pressure with the radii (monitor_run on the file `path`): its errors at 30 s and whether
-    each update after 2 s holds the truth within ±2σ."""
+    """The pressure the monitor reports (monitor_run on the file `path`: with the radii, or the
+    vibration's where their analysis stopped): its errors at 30 s, whether each update after 2 s holds
+    the truth within ±2σ and whether it had the radii."""
     from suvtwin.pipeline.monitoring import monitor_run
 
     res = monitor_run(path).table
     idx = np.searchsorted(t, res["t_s"].to_numpy())
-    fused = res[[f"{c}_fused_pressure_kpa" for c in CORNERS]].to_numpy()
-    fsig = res[[f"{c}_fused_sigma_kpa" for c in CORNERS]].to_numpy()
-    # where there is no pressure with the radii (their analysis stopped), the vibration's, as a user has
-    here = np.isfinite(fused)
-    fused = np.where(here, fused, res[[f"{c}_pressure_hat_kpa" for c in CORNERS]].to_numpy())
-    fsig = np.where(here, fsig, res[[f"{c}_pressure_sigma_kpa" for c in CORNERS]].to_numpy())
+    fused = res[[f"{c}_pressure_hat_kpa" for c in CORNERS]].to_numpy()
+    fsig = res[[f"{c}_pressure_sigma_kpa" for c in CORNERS]].to_numpy()
+    here = res[[f"{c}_with_radii" for c in CORNERS]].to_numpy()
     err = fused - truth[idx]
     k = int(np.searchsorted(res["t_s"].to_numpy(), 30.0 - 1e-6))
     at_30 = err[k].tolist() if k < len(res) else []
