@@ -1410,7 +1410,8 @@ class TyreMonitor:
         tables besides each corner's own, 1.1 MB each with the full car; remade when dropped)."""
         arrays = [self._gain, self._u11, self._u22, self._u12, self._along, self._car_a, self._car_b,
                   self._car_a1, self._car_b1]  # fmt: skip
-        return int(sum(a.nbytes for a in arrays if a is not None))
+        made = self._slot_used.size  # the arrays grow by doubling: room beyond the slots made not counted
+        return int(sum(a[:made].nbytes for a in arrays if a is not None))
 
     @property
     def prior_pa(self) -> np.ndarray:
