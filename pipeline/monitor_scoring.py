@@ -278,18 +278,31 @@ def change_tracking(
     tol_kpa: float = 12.5,
     within_s: float = 15.0,
     k: float = 2.0,
+    names: Sequence[str] | None = None,
+    infos: Sequence[Mapping] | None = None,
 ) -> dict:
     """Tracking of one changed tyre per run (`changes[i]` = {"tire", "start_s", "end_s"}):
     settle times after the change ends (:func:`settle_time`; median, 90th percentile, max and the
     share ≤ `within_s`), and ±`k`σ coverage of that tyre's updates from the change's start on
-    (during and after) and during it only; the other tyres' coverage over the same span."""
+    (during and after) and during it only; the other tyres' coverage over the same span.
+
+    Each run not settled within `within_s` is listed (``not_settled``: run index or `names[i]`, its
+    road class and speed where `infos[i]` has them (``road_class``, ``speed_kmh``), the tyre, its
+    settle time (None: never), and the changed tyre's updates from the last one at or before the
+    change's end + `within_s` on, as [t s, estimate − truth kPa, σ kPa]), and how many of them were
+    outside ±`tol_kpa` at a σ above `tol_kpa` (``not_settled_sigma_above_tol``: the monitor said it
+    could not tell to within the tolerance)."""
     if len(traces) != len(changes):
         raise InputError(f"change_tracking: {len(traces)} traces but {len(changes)} changes")
-    settle, during_after, during, others = [], [], [], []
-    for tr, ch in zip(traces, changes, strict=True):
+    settle, during_after, during, others, missed = [], [], [], [], []
+    for n, (tr, ch) in enumerate(zip(traces, changes, strict=True)):
         i = CORNERS.index(ch["tire"])
         err = tr.error
         settle.append(settle_time(tr.t_est, err[:, i], ch["end_s"], tol_kpa=tol_kpa))
+        if not settle[-1] <= within_s:
+            missed.append(_unsettled_run(tr, i, ch, settle[-1], within_s, tol_kpa,
+                                         names[n] if names is not None else n,
+                                         infos[n] if infos is not None else {}))  # fmt: skip
         m = tr.t_est >= ch["start_s"]
         during_after.append(_inside(err[m, i], tr.sigma[m, i], k))
         md = m & (tr.t_est <= ch["end_s"])
@@ -303,10 +316,12 @@ def change_tracking(
         return float(x.mean()) if x.size else None
 
     finite = s[np.isfinite(s)]
+    with np.errstate(invalid="ignore"):  # inf − inf where the percentile falls between never-settled runs
+        p90 = float(np.percentile(s, 90)) if s.size else None
     return {
         "tol_kpa": tol_kpa,
         "settle_s_median": float(np.median(s)) if s.size else None,
-        "settle_s_p90": float(np.percentile(s, 90)) if s.size else None,
+        "settle_s_p90": p90,
         "settle_s_max": float(s.max()) if s.size else None,
         "never_settled": int(np.sum(~np.isfinite(s))),
         "settled_within": within_s,
@@ -316,7 +331,37 @@ def change_tracking(
         f"inside_{k:g}sigma_during": share(during),
         f"inside_{k:g}sigma_other_tyres": share(others),
         "runs": int(s.size),
+        "not_settled": missed,
+        "not_settled_sigma_above_tol": sum(m["sigma_above_tol"] for m in missed),
     }
+
+
+def _unsettled_run(
+    tr: MonitorTrace, i: int, ch: Mapping, settle_s: float, within_s: float, tol_kpa: float,
+    name: str | int, info: Mapping,
+) -> dict:
+    """One run of :func:`change_tracking` not settled within `within_s`: the changed tyre's updates
+    scored (from the last at or before the change's end + `within_s`), and whether the σ of the first
+    of them outside ±`tol_kpa` was above `tol_kpa`."""
+    t, e, sg = tr.t_est, tr.error[:, i], tr.sigma[:, i]
+    k0 = max(int(np.searchsorted(t, ch["end_s"] + within_s + 1e-9)) - 1, 0)
+    k0 = max(k0, int(np.searchsorted(t, ch["end_s"] - 1e-9)))  # none before the change's end
+    rows = [[float(t[k]), _round(e[k]), _round(sg[k])] for k in range(k0, t.size)]
+    with np.errstate(invalid="ignore"):
+        bad = [k for k in range(k0, t.size) if not abs(e[k]) <= tol_kpa]
+    return {
+        "run": name,
+        "road_class": info.get("road_class"),
+        "speed_kmh": _round(v) if isinstance(v := info.get("speed_kmh"), (int, float)) else v,
+        "tyre": ch["tire"],
+        "settle_s": float(settle_s) if np.isfinite(settle_s) else None,
+        "updates": rows,
+        "sigma_above_tol": bool(bad) and bool(sg[bad[0]] > tol_kpa),
+    }
+
+
+def _round(x: float, digits: int = 2) -> float | None:
+    return round(float(x), digits) if np.isfinite(x) else None
 
 
 def low_speed_shares(traces: Sequence[MonitorTrace], *, tol_kpa: float = 12.5, after_s: float = 2.0) -> dict:
@@ -611,8 +656,10 @@ def score_set(
             "coverage": coverage(own, k=2.0, after_s=2.0),
         }
         if set_name in ("slow_leak", "drop"):
-            out["vibration_only"]["change"] = change_tracking(own, [i["change"] for i in infos],
-                                                              tol_kpa=tol_kpa)
+            out["vibration_only"]["change"] = change_tracking(
+                own, [i["change"] for i in infos], tol_kpa=tol_kpa,
+                names=[str(i.get("name", k)) for k, i in enumerate(infos)], infos=infos,
+            )  # fmt: skip
         elif set_name == "low_speed":
             out["vibration_only"]["low_speed"] = low_speed_shares(own, tol_kpa=tol_kpa)
     classes = [i.get("road_class") for i in infos]
@@ -626,7 +673,9 @@ def score_set(
                 "coverage": coverage(sub, k=2.0, after_s=2.0)["inside"],
             }
     if set_name in ("slow_leak", "drop"):
-        out["change"] = change_tracking(traces, [i["change"] for i in infos], tol_kpa=tol_kpa)
+        out["change"] = change_tracking(traces, [i["change"] for i in infos], tol_kpa=tol_kpa,
+                                        names=[str(i.get("name", k)) for k, i in enumerate(infos)],
+                                        infos=infos)  # fmt: skip
     elif set_name == "low_speed":
         out["low_speed"] = low_speed_shares(traces, tol_kpa=tol_kpa)
     elif set_name in ("warning", "warning_multi"):

@@ -115,6 +115,25 @@ def test_change_tracking_of_a_lagging_estimate():
     # outside ±20 kPa for t in (10.6, 16.9) s, the updates 11.0 ... 16.5 = 12 of the 60 from 10 s
     assert out["inside_2sigma_during_and_after"] == pytest.approx(48 / 60)
     assert out["inside_2sigma_other_tyres"] == 1.0
+    assert out["not_settled"] == [] and out["not_settled_sigma_above_tol"] == 0
+    # asked to settle within 5 s, the run is listed with the updates scored: from the last update at
+    # or before 11.5 + 5 = 16.5 s, where the estimate is ramp(10.5) = 230 - 50/3 against 180 kPa
+    for sigma, above in ((10.0, False), (20.0, True)):
+        tr = replace(trace, sigma=np.full((t_est.size, 4), sigma))
+        out = change_tracking([tr], [{"tire": "fr", "start_s": 10.0, "end_s": 11.5}], within_s=5.0,
+                              names=["drop_7"], infos=[{"road_class": "D", "speed_kmh": 104.0}])  # fmt: skip
+        (miss,) = out["not_settled"]
+        assert (miss["run"], miss["road_class"], miss["tyre"]) == ("drop_7", "D", "fr")
+        assert miss["speed_kmh"] == 104.0
+        assert miss["settle_s"] == pytest.approx(6.0)
+        assert miss["updates"][0] == [16.5, pytest.approx(50.0 - 50.0 / 3.0, abs=0.01), sigma]
+        assert [u[0] for u in miss["updates"]] == list(t_est[t_est >= 16.5])
+        assert miss["sigma_above_tol"] is above and out["not_settled_sigma_above_tol"] == int(above)
+    # never settled: the estimate stays at 230 kPa; named by its index without names
+    tr = replace(trace, p_hat=np.full((t_est.size, 4), 230.0))
+    (miss,) = change_tracking([tr], [{"tire": "fr", "start_s": 10.0, "end_s": 11.5}])["not_settled"]
+    assert miss["run"] == 0 and miss["settle_s"] is None and miss["road_class"] is None
+    assert miss["updates"][0][0] == 26.5 and miss["updates"][-1] == [39.5, 50.0, 10.0]
 
 
 def test_low_speed_shares():
