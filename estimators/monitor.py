@@ -150,9 +150,11 @@ periodogram is averaged in bands of ``merge_width_hz``):
    tempered by ``closure_tempering`` (each update's windows share an error their number does not
    shrink), and the output adds its model-error floor (``closure_floor_kpa``). On the 100
    ``constant`` runs (with the radii) it took the error from ± 15.0 / 10.1 kPa at 10 / 30 s to
-   ± 10.8 / 6.2 with 4 s windows, to ± 6.4 / 3.3 with 0.5 s windows, to ± 6.4 / 3.0 tempered (the
-   default); class D's wheels reach the stops often, so fewer of its windows are clear
-   (docs/monitor.md).
+   ± 10.8 / 6.2 with 4 s windows, to ± 6.4 / 3.3 with 0.5 s windows, to ± 6.4 / 3.0 tempered; class
+   D's wheels reach the stops often, so fewer of its windows are clear: a track whose 0.5 s windows
+   mostly are not is read in 0.25 s windows, each kind weighed by its own residual level (since
+   2026-12-05; ± 6.5 / 3.3 → ± 4.2 / 2.6 kPa, class D ± 10.0 / 4.6 → ± 5.0 / 2.6;
+   docs/monitor.md).
 
 Everything uses data up to t only (the speed included): the estimate at t from a record cut
 at t is the estimate at t from the whole record.
@@ -1381,6 +1383,7 @@ class TyreMonitor:
                 "despiked": np.zeros(n_c, dtype=int),
                 "closure_windows": np.zeros(n_c, dtype=int),
                 "closure_skipped": np.zeros(n_c, dtype=int),
+                "closure_short_windows": np.zeros(n_c, dtype=int),
             },
             coh_ab=np.zeros(self.freq.size),
             coh_bb=np.zeros(self.freq.size),
@@ -1926,11 +1929,16 @@ class TyreMonitor:
             for c, qc in enumerate(self.models)
         ]  # fmt: skip
         stream = ClosureStream(parts, self.tracks, float(wheelbase_m), self.dt, config)
-        weights = [stream.weights(f, r, self._kt_coarse[f], self._kt_coarse[r],
-                                  tyre_damping=0.5 * (self.models[f].tire_damping
-                                                      + self.models[r].tire_damping),
-                                  noise_sigma=cfg.sigma_accel)
-                   for f, r in self.tracks]  # fmt: skip
+        # per track, its windows' weights and its short windows' (None where the stream reads none)
+        weights = []
+        for f, r in self.tracks:
+            damping = 0.5 * (self.models[f].tire_damping + self.models[r].tire_damping)
+            weights.append(tuple(
+                stream.weights(f, r, self._kt_coarse[f], self._kt_coarse[r], tyre_damping=damping,
+                               noise_sigma=cfg.sigma_accel, short=short)
+                if not short or stream.m_short else None
+                for short in (False, True)
+            ))  # fmt: skip
         return stream, weights
 
     def _correct_closure(self, block, checks: np.ndarray, status: np.ndarray, elapsed: float) -> None:
@@ -1978,13 +1986,22 @@ class TyreMonitor:
                 continue
             counts["closure_windows"][[f, r]] += found.windows[i]
             counts["closure_skipped"][[f, r]] += found.skipped[i]
-            if found.windows[i] == 0:
+            n_short = 0 if found.short_windows is None else int(found.short_windows[i])
+            if n_short:
+                counts["closure_short_windows"][[f, r]] += n_short
+            if found.windows[i] == 0 and n_short == 0:
                 continue
-            # J on the two tyres' coarse grids (f, r) from the windows' moments
-            j = objective_on_grid(found.moments[i], self._closure_weights[i])
-            j_min = float(j.min())
-            dof = 2.0 * found.moments.shape[-1] * found.windows[i] / 1.5
-            ll = -(j - j_min) / (2.0 * cfg.closure_tempering * max(j_min / dof, 1e-12))
+            # J on the two tyres' coarse grids (f, r) from the windows' moments, the short windows' apart
+            # (their own bins and residual level)
+            ll = 0.0
+            for moments, n_w, weights in ((found.moments, found.windows[i], self._closure_weights[i][0]),
+                                          (found.short_moments, n_short, self._closure_weights[i][1])):
+                if n_w == 0:
+                    continue
+                j = objective_on_grid(moments[i], weights)
+                j_min = float(j.min())
+                dof = 2.0 * moments.shape[-1] * n_w / 1.5
+                ll = ll - (j - j_min) / (2.0 * cfg.closure_tempering * max(j_min / dof, 1e-12))
             marg = np.stack([post[f].sum(axis=(0, 1, 2)), post[r].sum(axis=(0, 1, 2))])  # (2, P) marginals
             marg /= marg.sum(axis=1, keepdims=True)
             # the log-likelihood of each coarse pressure of one tyre, the other's summed out (fine grid)

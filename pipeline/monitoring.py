@@ -568,6 +568,8 @@ def monitor_run(
             "config": asdict(monitor.closure_config),
             "windows": dict(zip(corners, counts["closure_windows"].tolist(), strict=True)),
             "skipped": dict(zip(corners, counts["closure_skipped"].tolist(), strict=True)),
+            # the short windows read where a span's windows were mostly not clear (a rough road)
+            "short_windows": dict(zip(corners, counts["closure_short_windows"].tolist(), strict=True)),
         },
         "radius": None if evidence is None else {
             "config": asdict(analysis.config),

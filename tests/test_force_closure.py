@@ -307,3 +307,56 @@ def test_the_compiled_objective_is_the_objective(track):
     fast = objective_on_grid(total[0], w)
     assert fast.shape == direct.shape == (7, 5)
     np.testing.assert_allclose(fast, direct, rtol=1e-10)
+
+
+def test_a_track_whose_windows_mostly_reach_a_stop_is_read_in_short_windows(track):
+    # the first track's rear reaches its bump stop 31 times in 24 s (its travel's 90 % quantile): most
+    # 0.5 s spans have fewer than half their windows clear, and are read in 0.25 s windows instead,
+    # which tile the same time (two in each window's hop) and still close on the true tyres; the other
+    # track (the same cars, no stop) reads its 0.5 s windows as before, to the bit
+    body, wheel = track["acc_r"]
+    clearance = float(np.quantile(integrate(wheel - body, DT, 2), 0.9))
+    rng = np.random.default_rng(3)
+    bf, wf = (a + 0.05 * rng.standard_normal(a.size) for a in track["acc_f"])
+    br, wr = (a + 0.05 * rng.standard_normal(a.size) for a in track["acc_r"])
+    a_s, a_u = np.column_stack([bf, bf, br, br]), np.column_stack([wf, wf, wr, wr])
+    parts = [_parts(**track["front"]), _parts(**track["front"]),
+             _parts(**track["rear"], bump_clearance=clearance), _parts(**track["rear"])]  # fmt: skip
+    grid = np.linspace(150e3, 300e3, 301)
+    found = {}
+    for name, config in (("default", None), ("none", ClosureConfig(short_window_s=None))):
+        stream = ClosureStream(parts, ((0, 2), (1, 3)), 20.0 * track["delay"], DT, config)
+        sums = None
+        for i in range(0, track["n"], 4000):
+            got = stream.add(np.full(4000, 20.0), a_s[i : i + 4000], a_u[i : i + 4000], np.ones(4000, bool))
+            parts_of = [got.moments, got.windows, got.skipped]
+            if got.short_windows is not None:
+                parts_of += [got.short_moments, got.short_windows, got.short_skipped]
+            sums = parts_of if sums is None else [a + b for a, b in zip(sums, parts_of, strict=True)]
+        found[name] = (stream, sums)
+    stream, (moments, windows, skipped, s_moments, s_windows, s_skipped) = found["default"]
+    _, (moments_none, windows_none, skipped_none) = found["none"]
+    assert s_windows[0] > windows[0] and s_windows[1] == s_skipped[1] == 0
+    # each span read one way: two short windows for each window's place
+    assert 2 * (windows[0] + skipped[0]) + s_windows[0] + s_skipped[0] == 2 * (windows[1] + skipped[1])
+    assert windows_none[0] + skipped_none[0] == windows[1] + skipped[1]
+    np.testing.assert_array_equal(moments[1], moments_none[1])
+    np.testing.assert_array_equal(windows[1], windows_none[1])
+    w = stream.weights(0, 2, grid, grid, tyre_damping=200.0, noise_sigma=0.05, short=True)
+    j = objective_from_moments(s_moments[0], weights=w)
+    best = np.unravel_index(np.argmin(j), j.shape)
+    assert grid[best[0]] == pytest.approx(235_000.0, rel=0.015)
+    assert grid[best[1]] == pytest.approx(198_000.0, rel=0.015)
+
+
+def test_short_windows_must_tile_the_windows_hop():
+    parts = [_parts(470.0, 61.0, 32_000.0, 2_500.0)] * 4
+    with pytest.raises(InputError, match="short_window_s"):
+        ClosureStream(parts, ((0, 2), (1, 3)), 2.8, DT, ClosureConfig(short_window_s=0.2))
+    with pytest.raises(InputError, match="short_window_s"):
+        ClosureConfig(short_window_s=0.4)
+    with pytest.raises(InputError, match="short_below"):
+        ClosureConfig(short_below=1.5)
+    stream = ClosureStream(parts, ((0, 2), (1, 3)), 2.8, DT, ClosureConfig(short_window_s=None))
+    with pytest.raises(InputError, match="no short windows"):
+        stream.weights(0, 2, [2e5], [2e5], tyre_damping=200.0, noise_sigma=0.05, short=True)
