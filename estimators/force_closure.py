@@ -678,7 +678,7 @@ class ClosureBlock:
     (T, :data:`MOMENTS`, F) and how many windows (T,); windows passed over (no contact, a stop, the
     speed) beside them (T,); and the same of the short windows read where the windows were mostly
     not clear (:class:`ClosureConfig`'s ``short_window_s``; moments (T, MOMENTS, F_short): their bins
-    are wider)."""
+    are wider; F_short 0 and no windows where the stream reads none)."""
 
     moments: np.ndarray
     windows: np.ndarray
@@ -834,8 +834,6 @@ class ClosureStream:
         drop = max(0, min(self._next - self.max_shift - self.margin, end) - self._first)
         self._v, self._a_s, self._a_u = self._v[drop:], self._a_s[:, drop:], self._a_u[:, drop:]
         self._first += drop
-        if not self.m_short:
-            return ClosureBlock(moments, windows, skipped)
         return ClosureBlock(moments, windows, skipped, *short)
 
     def _analyse(self, starts, moments, windows, skipped, short) -> None:

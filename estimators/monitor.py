@@ -1986,9 +1986,8 @@ class TyreMonitor:
                 continue
             counts["closure_windows"][[f, r]] += found.windows[i]
             counts["closure_skipped"][[f, r]] += found.skipped[i]
-            n_short = 0 if found.short_windows is None else int(found.short_windows[i])
-            if n_short:
-                counts["closure_short_windows"][[f, r]] += n_short
+            n_short = int(found.short_windows[i])
+            counts["closure_short_windows"][[f, r]] += n_short
             if found.windows[i] == 0 and n_short == 0:
                 continue
             # J on the two tyres' coarse grids (f, r) from the windows' moments, the short windows' apart

@@ -635,6 +635,7 @@ def score_set(
     if len(traces) != len(infos):
         raise InputError(f"score_set: {len(traces)} traces but {len(infos)} infos")
     minutes = sum(t.duration_s for t in traces) / 60.0
+    names = [str(i.get("name", k)) for k, i in enumerate(infos)]  # each run's, as the scores name it
     out: dict = {"set": set_name, "runs": len(traces), "simulated_min": minutes}
     out["error_at"] = {f"{at:g}s": errors_at(traces, at) for at in (10.0, 30.0)}
     out["error_at_observable"] = {
@@ -658,7 +659,7 @@ def score_set(
         if set_name in ("slow_leak", "drop"):
             out["vibration_only"]["change"] = change_tracking(
                 own, [i["change"] for i in infos], tol_kpa=tol_kpa,
-                names=[str(i.get("name", k)) for k, i in enumerate(infos)], infos=infos,
+                names=names, infos=infos,
             )  # fmt: skip
         elif set_name == "low_speed":
             out["vibration_only"]["low_speed"] = low_speed_shares(own, tol_kpa=tol_kpa)
@@ -674,8 +675,7 @@ def score_set(
             }
     if set_name in ("slow_leak", "drop"):
         out["change"] = change_tracking(traces, [i["change"] for i in infos], tol_kpa=tol_kpa,
-                                        names=[str(i.get("name", k)) for k, i in enumerate(infos)],
-                                        infos=infos)  # fmt: skip
+                                        names=names, infos=infos)  # fmt: skip
     elif set_name == "low_speed":
         out["low_speed"] = low_speed_shares(traces, tol_kpa=tol_kpa)
     elif set_name in ("warning", "warning_multi"):
@@ -683,7 +683,7 @@ def score_set(
             traces,  # a miss's estimate and σ: the best, what the warning decided on
             [i["deflated"] for i in infos],
             window_s=60.0,
-            names=[str(i.get("name", k)) for k, i in enumerate(infos)],
+            names=names,
             classes=classes if all(isinstance(c, str) for c in classes) else None,
         )
         # the regulations allow minutes (UN R141: 10 of driving): detection within longer windows
@@ -706,7 +706,7 @@ def score_set(
         ends, starts = [i["change"]["end_s"] for i in infos], [i["change"]["start_s"] for i in infos]
         out["warning"] = warning_detection(
             traces, deflated, window_s=60.0,
-            names=[str(i.get("name", k)) for k, i in enumerate(infos)],
+            names=names,
             classes=classes if all(isinstance(c, str) for c in classes) else None,
             from_s=ends, loss_start_s=starts,
         )  # fmt: skip
@@ -725,7 +725,6 @@ def score_set(
         out["references_learned"] = float(np.mean(learned)) if learned else None
     elif set_name == "nominal_long":
         weave = np.array([bool(i.get("weave")) for i in infos])
-        names = [str(i.get("name", k)) for k, i in enumerate(infos)]
         out["false_warnings"] = false_warnings(traces, names)
         lane = [k for k, w in enumerate(weave) if not w]
         out["false_warnings_lane"] = false_warnings([traces[k] for k in lane], [names[k] for k in lane])

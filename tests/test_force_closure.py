@@ -329,13 +329,13 @@ def test_a_track_whose_windows_mostly_reach_a_stop_is_read_in_short_windows(trac
         sums = None
         for i in range(0, track["n"], 4000):
             got = stream.add(np.full(4000, 20.0), a_s[i : i + 4000], a_u[i : i + 4000], np.ones(4000, bool))
-            parts_of = [got.moments, got.windows, got.skipped]
-            if got.short_windows is not None:
-                parts_of += [got.short_moments, got.short_windows, got.short_skipped]
+            parts_of = [got.moments, got.windows, got.skipped, got.short_moments, got.short_windows,
+                        got.short_skipped]
             sums = parts_of if sums is None else [a + b for a, b in zip(sums, parts_of, strict=True)]
         found[name] = (stream, sums)
     stream, (moments, windows, skipped, s_moments, s_windows, s_skipped) = found["default"]
-    _, (moments_none, windows_none, skipped_none) = found["none"]
+    _, (moments_none, windows_none, skipped_none, _, none_short, _) = found["none"]
+    assert not none_short.any()
     assert s_windows[0] > windows[0] and s_windows[1] == s_skipped[1] == 0
     # each span read one way: two short windows for each window's place
     assert 2 * (windows[0] + skipped[0]) + s_windows[0] + s_skipped[0] == 2 * (windows[1] + skipped[1])
