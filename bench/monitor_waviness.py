@@ -65,10 +65,9 @@ def would_be_false_warnings(traces) -> dict:
     keep = 1.0 - rule.detect_fraction
     warned = tyres = 0
     highest = 0.0
-    for trace in traces:
-        view = trace  # the monitor's estimate: with the radii where fused
+    for trace in traces:  # the monitor's estimate: with the radii where fused
         with np.errstate(invalid="ignore", divide="ignore"):
-            prob = norm.cdf((keep * view.truth_at_est - view.p_hat) / view.sigma)
+            prob = norm.cdf((keep * trace.truth_at_est - trace.p_hat) / trace.sigma)
         prob = np.nan_to_num(prob)
         n = rule.confirm_updates
         held = np.min(np.stack([prob[i : prob.shape[0] - n + 1 + i] for i in range(n)]), axis=0)
